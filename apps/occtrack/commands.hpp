@@ -1,0 +1,18 @@
+// Subcommands of the occtrack tool, one source file each. Each adds itself to the app and sets `exit_code`
+// when it runs.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace occtrack::app {
+
+void add_project_command(CLI::App& app, int& exit_code);
+void add_bench_command(CLI::App& app, int& exit_code);
+
+// Exit codes shared by the subcommands.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitInputError = 1;     // a file or setting was refused; the message says why
+inline constexpr int kExitMismatch = 3;       // a conformance case did not match its expected outputs
+inline constexpr int kExitSolveFailed = 4;    // the solver reported a non-finite result
+
+}  // namespace occtrack::app

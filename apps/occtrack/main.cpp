@@ -1,0 +1,22 @@
+// occtrack: occlusion-aware target tracking from the command line. `occtrack --help` lists the subcommands.
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"occtrack: occlusion-aware target tracking with a learned, projection-based policy"};
+  app.require_subcommand(1);
+  int exit_code = occtrack::app::kExitOk;
+  occtrack::app::add_project_command(app, exit_code);
+  occtrack::app::add_bench_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "occtrack: error: " << e.what() << "\n";
+    return occtrack::app::kExitInputError;
+  }
+  return exit_code;
+}

@@ -1,0 +1,94 @@
+#include "json_util.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace occtrack::io::detail {
+
+namespace {
+std::string describe(const json& value) {
+  std::string text = value.dump();
+  if (text.size() > 40) text = text.substr(0, 37) + "...";
+  return text;
+}
+}  // namespace
+
+void JsonReader::fail(const std::string& path, const std::string& rule) const {
+  throw InputError(source_ + ": " + path + ": " + rule);
+}
+
+const json& JsonReader::member(const json& parent, const std::string& path, const std::string& key) const {
+  const std::string full = path.empty() ? key : path + "." + key;
+  require_object(parent, path.empty() ? "(top level)" : path);
+  const auto it = parent.find(key);
+  if (it == parent.end()) fail(full, "missing required key");
+  return *it;
+}
+
+void JsonReader::only_keys(const json& object, const std::string& path,
+                           std::initializer_list<const char*> allowed) const {
+  require_object(object, path.empty() ? "(top level)" : path);
+  for (auto it = object.begin(); it != object.end(); ++it) {
+    bool known = false;
+    for (const char* key : allowed) known = known || it.key() == key;
+    if (!known) {
+      std::string list;
+      for (const char* key : allowed) list += std::string(list.empty() ? "" : ", ") + key;
+      fail(path.empty() ? it.key() : path + "." + it.key(), "unknown key (expected one of: " + list + ")");
+    }
+  }
+}
+
+void JsonReader::require_object(const json& value, const std::string& path) const {
+  if (!value.is_object()) fail(path, "must be an object, got " + describe(value));
+}
+
+double JsonReader::number(const json& value, const std::string& path) const {
+  // nlohmann parses NaN and Infinity only from non-standard text; strings such as "nan" are caught here too.
+  if (!value.is_number()) fail(path, "must be a number, got " + describe(value));
+  const double x = value.get<double>();
+  if (!std::isfinite(x)) fail(path, "must be a finite number");
+  return x;
+}
+
+int JsonReader::integer(const json& value, const std::string& path) const {
+  if (!value.is_number_integer()) fail(path, "must be an integer, got " + describe(value));
+  const auto x = value.get<long long>();
+  if (x < -1000000000LL || x > 1000000000LL) fail(path, "integer out of range: " + describe(value));
+  return static_cast<int>(x);
+}
+
+std::string JsonReader::string(const json& value, const std::string& path) const {
+  if (!value.is_string()) fail(path, "must be a string, got " + describe(value));
+  return value.get<std::string>();
+}
+
+std::vector<double> JsonReader::numbers(const json& value, const std::string& path, int size) const {
+  if (!value.is_array()) fail(path, "must be a list of numbers, got " + describe(value));
+  if (size >= 0 && static_cast<int>(value.size()) != size)
+    fail(path, "expected " + std::to_string(size) + " numbers, got " + std::to_string(value.size()));
+  std::vector<double> out;
+  out.reserve(value.size());
+  for (std::size_t i = 0; i < value.size(); ++i) out.push_back(number(value[i], path + "[" + std::to_string(i) + "]"));
+  return out;
+}
+
+json parse_json_text(const std::string& text, const std::string& source) {
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InputError(source + ": not valid JSON (" + e.what() + ")");
+  }
+}
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the file for reading");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": read error");
+  return buffer.str();
+}
+
+}  // namespace occtrack::io::detail

@@ -1,0 +1,71 @@
+#include "occtrack/projection/settings.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace occtrack::projection {
+
+namespace {
+
+// Collects the first broken rule; later checks are skipped once one fails.
+class Checker {
+ public:
+  template <typename... Parts>
+  void require(bool ok, const Parts&... parts) {
+    if (ok || !message_.empty()) return;
+    std::ostringstream out;
+    (out << ... << parts);
+    message_ = out.str();
+  }
+  void finite(double value, const char* field) {
+    require(std::isfinite(value), field, " must be a finite number, got ", value);
+  }
+  bool ok() const { return message_.empty(); }
+  const std::string& message() const { return message_; }
+
+ private:
+  std::string message_;
+};
+
+}  // namespace
+
+bool Settings::validate(std::string* error) const {
+  Checker c;
+  c.require(degree >= 5 && degree <= 30, "degree (", degree,
+            ") must be between 5 and 30: the initial guess meets six conditions per axis");
+  c.require(steps >= 4, "steps (", steps, ") must be at least 4");
+  c.finite(horizon, "horizon");
+  c.require(horizon > 0.0, "horizon (", horizon, ") must be positive");
+  c.require(via_step_1 > 0 && via_step_1 < steps - 1, "via_step_1 (", via_step_1,
+            ") must lie strictly inside the horizon, between 1 and steps - 2 (", steps - 2, ")");
+  c.require(via_step_2 > via_step_1 && via_step_2 < steps - 1, "via_step_2 (", via_step_2,
+            ") must be greater than via_step_1 (", via_step_1, ") and at most steps - 2 (", steps - 2, ")");
+  c.require(batch >= 1, "batch (", batch, ") must be at least 1");
+  c.require(obstacles >= 0, "obstacles (", obstacles, ") must not be negative");
+  c.require(iterations >= 1, "iterations (", iterations, ") must be at least 1");
+  c.finite(obstacle_radius, "obstacle_radius");
+  c.require(obstacle_radius > 0.0, "obstacle_radius (", obstacle_radius, ") must be positive");
+  c.finite(speed_min, "speed_min");
+  c.finite(speed_max, "speed_max");
+  c.require(speed_min >= 0.0, "speed_min (", speed_min, ") must not be negative");
+  c.require(speed_max > 0.0, "speed_max (", speed_max, ") must be positive");
+  c.require(speed_min <= speed_max, "speed_min (", speed_min, ") must not exceed speed_max (", speed_max, ")");
+  c.finite(accel_max, "accel_max");
+  c.require(accel_max > 0.0, "accel_max (", accel_max, ") must be positive");
+  const std::pair<const char*, double> weights[] = {{"rho.obstacle", rho.obstacle},
+                                                     {"rho.velocity", rho.velocity},
+                                                     {"rho.acceleration", rho.acceleration},
+                                                     {"rho.tracking", rho.tracking},
+                                                     {"rho.projection", rho.projection}};
+  for (const auto& [name, value] : weights) {
+    c.finite(value, name);
+    c.require(value >= 0.0, name, " (", value, ") must not be negative");
+  }
+  c.require(rho.projection > 0.0, "rho.projection (", rho.projection,
+            ") must be positive: it keeps the projection's KKT matrix invertible");
+  c.require(threads >= 1, "threads (", threads, ") must be at least 1");
+  if (!c.ok() && error != nullptr) *error = c.message();
+  return c.ok();
+}
+
+}  // namespace occtrack::projection
