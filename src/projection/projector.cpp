@@ -76,12 +76,13 @@ struct Projector<T>::Impl {
     Matrix<T> Eval;                              // 3 mp x 2count: p, pd, pdd at every padded step
     Matrix<T> Delta;                             // 3 mp x 2count: weighted corrections S (see solve_chunk)
     Matrix<T> Bound_min, Bound_max;              // mp x count: tracking band, padded
-    Vector<T> wx, wy;                            // mp: tracking offset p - p_r
     Vector<T> obstacle_x, obstacle_y;            // mp: sum over points of e_o - p
+    Matrix<T> Points;                            // 4 Np x count: x, y, vx, vy of each sample's points
+    std::vector<int> near;                       // Np: points near the current chunk of steps
   };
 
   Settings settings;
-  int n = 0, m = 0, mp = 0;
+  int n = 0, m = 0, mp = 0, Np = 0;
   Matrix<T> G;             // 3 mp x n: [P; Pd; Pdd], padded with zero rows
   Matrix<T> M11;           // n x n: top-left block of the inverse projection KKT matrix
   Matrix<T> M11_Qm;        // n x n: M11 (Q - rho_p I)
@@ -97,6 +98,7 @@ struct Projector<T>::Impl {
     n = settings.coefficients();
     m = settings.steps;
     mp = round_up(m, detail::Simd<T>::width);
+    Np = round_up(settings.obstacles, detail::Simd<T>::width);
     const core::BernsteinBasis basis = core::bernstein_basis(settings.degree, m, settings.horizon);
     factor(basis);
 
@@ -121,7 +123,10 @@ struct Projector<T>::Impl {
       w.Delta.setZero(3 * mp, cols);
       w.Bound_min.setZero(mp, w.count);
       w.Bound_max.setZero(mp, w.count);
-      for (Vector<T>* v : {&w.wx, &w.wy, &w.obstacle_x, &w.obstacle_y}) v->setZero(mp);
+      for (Vector<T>* v : {&w.obstacle_x, &w.obstacle_y}) v->setZero(mp);
+      // Padding points sit far away, so that they are never near a trajectory.
+      w.Points.setConstant(4 * Np, w.count, T(1e15));
+      w.near.assign(Np, 0);
     }
   }
 
@@ -172,6 +177,8 @@ struct Projector<T>::Impl {
         w.Rhs.col(col) = rho_p * problem.xi_bar.row(b).segment(axis * n, n).transpose();
         w.Bias.col(col).noalias() = M12 * equality_rhs;
       }
+      for (int j = 0; j < settings.obstacles; ++j)
+        for (int field = 0; field < 4; ++field) w.Points(field * Np + j, i) = problem.obstacles(b, 4 * j + field);
       w.Bound_min.col(i).head(m) = problem.distance_min.row(b).transpose();
       w.Bound_max.col(i).head(m) = problem.distance_max.row(b).transpose();
       result.residual(b) = T(0);
@@ -206,31 +213,27 @@ struct Projector<T>::Impl {
         T* dy = w.Delta.col(2 * i + 1).data();
 
         // Steps 2 and 6: obstacles.
-        const T obstacle_sq = N == 0 ? T(0)
-                                     : detail::obstacle_term<T>(px, py, times.data(), mask.data(), mp,
-                                                                problem.obstacles.row(b).data(), N, radius,
-                                                                w.obstacle_x.data(), w.obstacle_y.data());
-        // Step 5: tracking, against the linear prediction of the target.
-        const T xr = problem.target(b, 0), yr = problem.target(b, 1);
-        const T vxr = problem.target(b, 2), vyr = problem.target(b, 3);
-        for (int k = 0; k < mp; ++k) {
-          w.wx(k) = px[k] - (xr + vxr * times(k));
-          w.wy(k) = py[k] - (yr + vyr * times(k));
-        }
-        const T tracking_sq =
-            detail::band_term<T>(w.wx.data(), w.wy.data(), mask.data(), mp, w.Bound_min.col(i).data(), 1,
-                                 w.Bound_max.col(i).data(), 1, rho_r, dx, dy);
-        if (N > 0) {
-          for (int k = 0; k < mp; ++k) {
-            dx[k] += rho_o * w.obstacle_x(k);
-            dy[k] += rho_o * w.obstacle_y(k);
-          }
-        }
+        const T* soa = w.Points.col(i).data();
+        const detail::ObstaclePoints<T> points{problem.obstacles.row(b).data(), soa, soa + Np, soa + 2 * Np,
+                                               soa + 3 * Np, N, Np};
+        const T obstacle_sq =
+            N == 0 ? T(0)
+                   : detail::obstacle_term<T>(px, py, times.data(), mask.data(), m, mp, points, radius,
+                                              w.near.data(), w.obstacle_x.data(), w.obstacle_y.data());
+        // Step 5: tracking, against the linear prediction of the target; the obstacle correction joins here.
+        const detail::Origin<T> target{problem.target(b, 0), problem.target(b, 1), problem.target(b, 2),
+                                       problem.target(b, 3)};
+        const T tracking_sq = detail::band_term<T>(
+            px, py, times.data(), mask.data(), mp, target, w.Bound_min.col(i).data(), 1, w.Bound_max.col(i).data(),
+            1, rho_r, N > 0 ? w.obstacle_x.data() : nullptr, w.obstacle_y.data(), rho_o, dx, dy);
         // Steps 3 and 4: velocity and acceleration.
-        const T velocity_sq = detail::band_term<T>(px + mp, py + mp, mask.data(), mp, &v_min, 0, &v_max, 0,
-                                                   T(rho.velocity), dx + mp, dy + mp);
-        const T accel_sq = detail::band_term<T>(px + 2 * mp, py + 2 * mp, mask.data(), mp, &a_min, 0, &a_max,
-                                                0, T(rho.acceleration), dx + 2 * mp, dy + 2 * mp);
+        const detail::Origin<T> none;
+        const T velocity_sq = detail::band_term<T>(px + mp, py + mp, times.data(), mask.data(), mp, none, &v_min, 0,
+                                                   &v_max, 0, T(rho.velocity), nullptr, nullptr, T(0), dx + mp,
+                                                   dy + mp);
+        const T accel_sq = detail::band_term<T>(px + 2 * mp, py + 2 * mp, times.data(), mask.data(), mp, none,
+                                                &a_min, 0, &a_max, 0, T(rho.acceleration), nullptr, nullptr, T(0),
+                                                dx + 2 * mp, dy + 2 * mp);
         // Step 6: |r_o| + |r_a| + |r_v| + |r_r|, averaged over the iterations.
         const T residual =
             std::sqrt(obstacle_sq) + std::sqrt(accel_sq) + std::sqrt(velocity_sq) + std::sqrt(tracking_sq);
