@@ -70,8 +70,13 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 // the coefficients, and a 0/1 mask keeps them out of the residual.
 template <typename T>
 struct Projector<T>::Impl {
+  // Samples are solved in blocks of at most this many: a block's matrices stay in the L2 cache through
+  // all K iterations, and the products' scratch space stays small enough for Eigen to keep on the stack.
+  static constexpr int kBlock = 32;
+
   struct Workspace {
-    int first = 0, count = 0;  // samples [first, first + count)
+    int first = 0, count = 0;  // this thread's samples [first, first + count), solved kBlock at a time
+    int block_first = 0, block_count = 0;  // the block in hand
     Matrix<T> C, C_next, Lambda, Bias, Rhs, H;  // n x 2count
     Matrix<T> Eval;                              // 3 mp x 2count: p, pd, pdd at every padded step
     Matrix<T> Delta;                             // 3 mp x 2count: weighted corrections S (see solve_chunk)
@@ -117,15 +122,16 @@ struct Projector<T>::Impl {
       Workspace& w = workspaces[t];
       w.first = settings.batch * t / threads;
       w.count = settings.batch * (t + 1) / threads - w.first;
-      const int cols = 2 * w.count;
+      const int block = std::min(w.count, kBlock);
+      const int cols = 2 * block;
       for (Matrix<T>* M : {&w.C, &w.C_next, &w.Lambda, &w.Bias, &w.Rhs, &w.H}) M->setZero(n, cols);
       w.Eval.setZero(3 * mp, cols);
       w.Delta.setZero(3 * mp, cols);
-      w.Bound_min.setZero(mp, w.count);
-      w.Bound_max.setZero(mp, w.count);
+      w.Bound_min.setZero(mp, block);
+      w.Bound_max.setZero(mp, block);
       for (Vector<T>* v : {&w.obstacle_x, &w.obstacle_y}) v->setZero(mp);
       // Padding points sit far away, so that they are never near a trajectory.
-      w.Points.setConstant(4 * Np, w.count, T(1e15));
+      w.Points.setConstant(4 * Np, block, T(1e15));
       w.near.assign(Np, 0);
     }
   }
@@ -157,13 +163,13 @@ struct Projector<T>::Impl {
     InitialGuess = kkt_init.fullPivLu().inverse().topRightCorner(n, 6).cast<T>();
   }
 
-  // Loads the chunk's inputs: xi_0 (spec "Initial guess"), lambda_0, the constant part of step 9.
-  void prepare_chunk(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
+  // Loads the block's inputs: xi_0 (spec "Initial guess"), lambda_0, the constant part of step 9.
+  void prepare_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
     const T rho_p = T(settings.rho.projection);
     Eigen::Matrix<T, 6, 1> initial_rhs;
     Eigen::Matrix<T, 4, 1> equality_rhs;
-    for (int i = 0; i < w.count; ++i) {
-      const int b = w.first + i;
+    for (int i = 0; i < w.block_count; ++i) {
+      const int b = w.block_first + i;
       for (int axis = 0; axis < 2; ++axis) {
         const int col = 2 * i + axis;
         const T v0 = problem.robot_velocity(b, axis);
@@ -183,7 +189,8 @@ struct Projector<T>::Impl {
       w.Bound_max.col(i).head(m) = problem.distance_max.row(b).transpose();
       result.residual(b) = T(0);
     }
-    w.Bias.noalias() += M11 * w.Rhs;
+    const int cols = 2 * w.block_count;
+    w.Bias.leftCols(cols).noalias() += M11 * w.Rhs.leftCols(cols);
   }
 
   // Steps 1 to 9 for every sample of the chunk, K times.
@@ -195,7 +202,7 @@ struct Projector<T>::Impl {
   //                     = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + Bias,
   // because G' targets = h + (Q - rho_p I) xi_k. This is the same arithmetic up to round-off, and it avoids
   // the cancellation between N p and sum_j e_o,j that costs float precision.
-  void iterate_chunk(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
+  void iterate_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
     const auto& rho = settings.rho;
     const T radius = T(settings.obstacle_radius);
     const T v_min = T(settings.speed_min), v_max = T(settings.speed_max);
@@ -203,10 +210,13 @@ struct Projector<T>::Impl {
     const T rho_o = T(rho.obstacle), rho_r = T(rho.tracking);
     const int N = settings.obstacles;
     const T inv_count = T(1) / T(settings.iterations);
+    const int cols = 2 * w.block_count;
+    auto C = w.C.leftCols(cols), C_next = w.C_next.leftCols(cols), Lambda = w.Lambda.leftCols(cols);
+    auto Rhs = w.Rhs.leftCols(cols), H = w.H.leftCols(cols), Eval = w.Eval.leftCols(cols);
     for (int iteration = 0; iteration < settings.iterations; ++iteration) {
-      w.Eval.noalias() = G * w.C;  // step 1
-      for (int i = 0; i < w.count; ++i) {
-        const int b = w.first + i;
+      Eval.noalias() = G * C;  // step 1
+      for (int i = 0; i < w.block_count; ++i) {
+        const int b = w.block_first + i;
         T* px = w.Eval.col(2 * i).data();
         T* py = w.Eval.col(2 * i + 1).data();
         T* dx = w.Delta.col(2 * i).data();
@@ -240,24 +250,28 @@ struct Projector<T>::Impl {
         result.residual(b) += residual * inv_count;
         if (settings.record_residual_history) result.residual_history(b, iteration) = residual;
       }
-      w.H.noalias() = G.transpose() * w.Delta;  // h = G' S
-      w.Lambda += w.H;                           // step 7
-      w.Rhs = w.Lambda + w.H;                    // step 8 and 9 (see above)
-      w.C_next = w.Bias;
-      w.C_next.noalias() += M11 * w.Rhs;
-      w.C_next.noalias() += M11_Qm * w.C;
-      w.C.swap(w.C_next);
+      H.noalias() = G.transpose() * w.Delta.leftCols(cols);  // h = G' S
+      Lambda += H;                                            // step 7
+      Rhs = Lambda + H;                                       // steps 8 and 9 (see above)
+      C_next = w.Bias.leftCols(cols);
+      C_next.noalias() += M11 * Rhs;
+      C_next.noalias() += M11_Qm * C;
+      C = C_next;
     }
-    for (int i = 0; i < w.count; ++i) {
-      const int b = w.first + i;
+    for (int i = 0; i < w.block_count; ++i) {
+      const int b = w.block_first + i;
       result.xi.row(b).head(n) = w.C.col(2 * i).transpose();
       result.xi.row(b).tail(n) = w.C.col(2 * i + 1).transpose();
     }
   }
 
   void solve_chunk(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
-    prepare_chunk(problem, w, result);
-    iterate_chunk(problem, w, result);
+    for (int first = w.first; first < w.first + w.count; first += kBlock) {
+      w.block_first = first;
+      w.block_count = std::min(kBlock, w.first + w.count - first);
+      prepare_block(problem, w, result);
+      iterate_block(problem, w, result);
+    }
   }
 };
 
