@@ -1,1 +1,89 @@
+// Once set up, Projector::solve performs no heap allocation (threads == 1). Two independent witnesses:
+// Eigen's own check (EIGEN_RUNTIME_NO_MALLOC, assertions on: any Eigen allocation aborts), and a count of
+// every global operator new in this program.
 #include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "occtrack/projection/problem_generator.hpp"
+#include "occtrack/projection/projector.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}
+
+void* operator new(std::size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, std::align_val_t align) {
+  ++g_allocations;
+  const std::size_t a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace {
+
+using namespace occtrack::projection;
+
+template <typename T>
+long allocations_during_solve(int batch, int obstacles, bool history) {
+  Settings s;
+  s.batch = batch;
+  s.obstacles = obstacles;
+  s.iterations = 10;
+  s.record_residual_history = history;
+  Projector<T> projector(s);
+  Problem<T> problem;
+  fill_random_problem<T>(s, {7, 0.3}, problem);
+  Result<T> result = projector.make_result();
+  std::string error;
+  const long before = g_allocations.load();
+  Eigen::internal::set_is_malloc_allowed(false);
+  const bool ok = projector.solve(problem, result, &error);
+  Eigen::internal::set_is_malloc_allowed(true);
+  const long during = g_allocations.load() - before;
+  EXPECT_TRUE(ok) << error;
+  EXPECT_EQ(result.status, SolveStatus::solved);
+  return during;
+}
+
+TEST(NoAllocation, SolveDoesNotAllocateInFloatOrDouble) {
+  for (int batch : {1, 5, 30, 200}) {
+    EXPECT_EQ(allocations_during_solve<float>(batch, 60, false), 0) << "float, batch " << batch;
+    EXPECT_EQ(allocations_during_solve<double>(batch, 60, true), 0) << "double, batch " << batch;
+  }
+  EXPECT_EQ(allocations_during_solve<float>(30, 0, false), 0) << "no obstacle points";
+}
+
+TEST(NoAllocation, TheWitnessesWork) {
+  // The counter sees allocations...
+  const long before = g_allocations.load();
+  Settings s;
+  Projector<float> projector(s);
+  EXPECT_GT(g_allocations.load() - before, 0);
+  // ...and Eigen's check is armed (it aborts on an allocation while forbidden).
+  EXPECT_DEATH(
+      {
+        Eigen::internal::set_is_malloc_allowed(false);
+        Eigen::MatrixXd m(50, 50);
+        m.setZero();
+      },
+      "");
+}
+
+}  // namespace

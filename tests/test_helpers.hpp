@@ -1,0 +1,39 @@
+// Shared helpers of the test suite.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+#include "occtrack/projection/projector.hpp"
+
+namespace occtrack::test {
+
+/// Worst |a - b| / max(1, |b|): relative for entries above 1, absolute below. Non-finite counts as infinite.
+template <typename A, typename B>
+double worst_error(const A& got, const B& expected) {
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < expected.rows(); ++i)
+    for (Eigen::Index j = 0; j < expected.cols(); ++j) {
+      const double g = static_cast<double>(got(i, j)), e = static_cast<double>(expected(i, j));
+      worst = std::max(worst, std::isfinite(g) ? std::abs(g - e) / std::max(1.0, std::abs(e)) : INFINITY);
+    }
+  return worst;
+}
+
+template <typename To, typename From>
+projection::Problem<To> cast_problem(const projection::Problem<From>& p) {
+  projection::Problem<To> q;
+  q.robot_velocity = p.robot_velocity.template cast<To>();
+  q.obstacles = p.obstacles.template cast<To>();
+  q.target = p.target.template cast<To>();
+  q.terminal = p.terminal.template cast<To>();
+  q.via_points = p.via_points.template cast<To>();
+  q.lambda0 = p.lambda0.template cast<To>();
+  q.distance_min = p.distance_min.template cast<To>();
+  q.distance_max = p.distance_max.template cast<To>();
+  q.xi_bar = p.xi_bar.template cast<To>();
+  return q;
+}
+
+}  // namespace occtrack::test
