@@ -300,14 +300,15 @@ INSTANTIATE_TEST_SUITE_P(WrongValue, ProjectionCaseBadInput, ::testing::ValuesIn
                          [](const auto& info) { return info.param.name; });
 
 const std::vector<BadCase> kBadSizes = {
-    {"steps_negative", [](json& d) { config(d)["steps"] = -5; }, "config.steps", "must be at least 4"},
-    {"steps_too_small", [](json& d) { config(d)["steps"] = 3; }, "config.steps", "must be at least 4"},
+    {"steps_negative", [](json& d) { config(d)["steps"] = -5; }, "config.steps", "must be between 4 and 10000"},
+    {"steps_too_small", [](json& d) { config(d)["steps"] = 3; }, "config.steps", "must be between 4 and 10000"},
+    {"steps_huge", [](json& d) { config(d)["steps"] = 1000000000; }, "config.steps", "must be between 4 and 10000"},
     {"degree_negative", [](json& d) { config(d)["degree"] = -1; }, "config.degree", "must be between 5 and 30"},
     {"degree_too_small", [](json& d) { config(d)["degree"] = 4; }, "config.degree", "must be between 5 and 30"},
     {"degree_too_large", [](json& d) { config(d)["degree"] = 31; }, "config.degree", "must be between 5 and 30"},
-    {"iterations_zero", [](json& d) { config(d)["iterations"] = 0; }, "config.iterations", "must be at least 1"},
+    {"iterations_zero", [](json& d) { config(d)["iterations"] = 0; }, "config.iterations", "must be between 1 and 1000000"},
     {"iterations_negative", [](json& d) { config(d)["iterations"] = -3; }, "config.iterations",
-     "must be at least 1"},
+     "must be between 1 and 1000000"},
     {"obstacle_radius_negative", [](json& d) { config(d)["obstacle_radius"] = -0.4; }, "config.obstacle_radius",
      "must be positive"},
     {"obstacle_radius_zero", [](json& d) { config(d)["obstacle_radius"] = 0.0; }, "config.obstacle_radius",
@@ -461,7 +462,7 @@ std::ostream& operator<<(std::ostream& out, const SettingsRule& r) { return out 
 
 class SettingsValidateMessage : public ::testing::TestWithParam<SettingsRule> {};
 
-TEST(SettingsValidate, DefaultsAreValidAndLeaveErrorAlone) {
+TEST(SettingsMessage, DefaultsAreValidAndLeaveErrorAlone) {
   const Settings s;
   std::string error = "untouched";
   EXPECT_TRUE(s.validate(&error));
@@ -486,7 +487,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 const std::vector<SettingsRule> kSettingsRules = {
     {"degree_low", [](Settings& s) { s.degree = 4; }, "degree (4)", "must be between 5 and 30"},
     {"degree_high", [](Settings& s) { s.degree = 31; }, "degree (31)", "must be between 5 and 30"},
-    {"steps", [](Settings& s) { s.steps = 3; }, "steps (3)", "must be at least 4"},
+    {"steps", [](Settings& s) { s.steps = 3; }, "steps (3)", "must be between 4 and 10000"},
+    {"steps_too_large", [](Settings& s) { s.steps = 20000; }, "steps (20000)", "must be between 4 and 10000"},
+    {"batch_too_large", [](Settings& s) { s.batch = 2000000; }, "batch (2000000)", "must be between 1 and 1000000"},
     {"horizon_nan", [](Settings& s) { s.horizon = kNaN; }, "horizon", "must be a finite number"},
     {"horizon_inf", [](Settings& s) { s.horizon = kInf; }, "horizon", "must be a finite number"},
     {"horizon_zero", [](Settings& s) { s.horizon = 0.0; }, "horizon (0)", "must be positive"},
@@ -495,9 +498,9 @@ const std::vector<SettingsRule> kSettingsRules = {
     {"via_step_2_before_1", [](Settings& s) { s.via_step_2 = 40; }, "via_step_2 (40)",
      "must be greater than via_step_1 (49)"},
     {"via_step_2_last", [](Settings& s) { s.via_step_2 = 99; }, "via_step_2 (99)", "at most steps - 2 (98)"},
-    {"batch", [](Settings& s) { s.batch = 0; }, "batch (0)", "must be at least 1"},
-    {"obstacles", [](Settings& s) { s.obstacles = -1; }, "obstacles (-1)", "must not be negative"},
-    {"iterations", [](Settings& s) { s.iterations = 0; }, "iterations (0)", "must be at least 1"},
+    {"batch", [](Settings& s) { s.batch = 0; }, "batch (0)", "must be between 1 and 1000000"},
+    {"obstacles", [](Settings& s) { s.obstacles = -1; }, "obstacles (-1)", "must be between 0 and 100000"},
+    {"iterations", [](Settings& s) { s.iterations = 0; }, "iterations (0)", "must be between 1 and 1000000"},
     {"obstacle_radius_nan", [](Settings& s) { s.obstacle_radius = kNaN; }, "obstacle_radius",
      "must be a finite number"},
     {"obstacle_radius_zero", [](Settings& s) { s.obstacle_radius = 0.0; }, "obstacle_radius (0)",
@@ -526,12 +529,12 @@ const std::vector<SettingsRule> kSettingsRules = {
     {"rho_projection_negative", [](Settings& s) { s.rho.projection = -1.0; }, "rho.projection (-1)",
      "must not be negative"},
     {"rho_projection_zero", [](Settings& s) { s.rho.projection = 0.0; }, "rho.projection (0)", "must be positive"},
-    {"threads", [](Settings& s) { s.threads = 0; }, "threads (0)", "must be at least 1"},
+    {"threads", [](Settings& s) { s.threads = 0; }, "threads (0)", "must be between 1 and 1024"},
 };
 INSTANTIATE_TEST_SUITE_P(Rule, SettingsValidateMessage, ::testing::ValuesIn(kSettingsRules),
                          [](const auto& info) { return info.param.name; });
 
-TEST(SettingsValidate, ReportsTheFirstBrokenRule) {
+TEST(SettingsMessage, ReportsTheFirstBrokenRule) {
   Settings s;
   s.degree = 2;
   s.threads = 0;
@@ -541,7 +544,7 @@ TEST(SettingsValidate, ReportsTheFirstBrokenRule) {
   EXPECT_FALSE(contains(error, "threads")) << error;
 }
 
-TEST(SettingsValidate, ZeroWeightsOtherThanProjectionAreValid) {
+TEST(SettingsMessage, ZeroWeightsOtherThanProjectionAreValid) {
   Settings s;
   s.rho.obstacle = s.rho.velocity = s.rho.acceleration = s.rho.tracking = 0.0;
   s.obstacles = 0;
@@ -684,7 +687,7 @@ std::string constructor_error(const Settings& s) {
   return "";
 }
 
-TEST(ProjectorConstructor, ThrowsInvalidArgumentWithTheValidateMessage) {
+TEST(ProjectorConstructorMessage, ThrowsInvalidArgumentWithTheValidateMessage) {
   Settings s;
   s.speed_min = 3.0;
   s.speed_max = 2.0;
@@ -695,7 +698,7 @@ TEST(ProjectorConstructor, ThrowsInvalidArgumentWithTheValidateMessage) {
   EXPECT_TRUE(contains(message, "speed_min")) << message;
 }
 
-TEST(ProjectorConstructor, NamesEachBrokenField) {
+TEST(ProjectorConstructorMessage, NamesEachBrokenField) {
   {
     Settings s;
     s.threads = 0;

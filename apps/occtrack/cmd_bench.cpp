@@ -126,29 +126,29 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   CLI::App* cmd = bench->add_subcommand("projection", "Time the batched projection on random plausible problems");
-  cmd->add_option("--batch", o->batch, "Samples per solve (B)")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--batch", o->batch, "Samples per solve (B)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--obstacles", o->obstacles, "Obstacle points per sample (N)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   cmd->add_option("--iterations", o->iterations, "Projection iterations (K)")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--precision", o->precision, "Arithmetic")
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "Threads the batch is split over")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 1024))
       ->capture_default_str();
-  cmd->add_option("--repeats", o->repeats, "Timed solves")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--repeats", o->repeats, "Timed solves")->check(CLI::Range(1, 10000000))->capture_default_str();
   cmd->add_option("--problems", o->problems, "Distinct random problems, solved round-robin")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 10000))
       ->capture_default_str();
   cmd->add_option("--moving-share", o->moving_share, "Share of moving obstacles in the random worlds")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   cmd->add_flag("--literal", o->literal, "Also time the line-by-line reference implementation, in the same run");
   cmd->add_option("--literal-repeats", o->literal_repeats, "Timed solves of the reference implementation")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_flag("--json", o->json, "Print one JSON object (median_ms, p99_ms, ...) instead of text");
   cmd->callback([o, &exit_code]() {

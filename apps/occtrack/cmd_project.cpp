@@ -52,22 +52,31 @@ void print_summary(std::ostream& out, const io::ProjectionCase& c, const project
       << s.obstacles << " obstacle points, " << s.iterations << " iterations, solved in ";
   std::snprintf(line, sizeof line, "%.3f ms (%s)\n", solve_ms, projection::to_string(result.status));
   out << line;
-  out << " sample  residual  clearance_m  speed_max  accel_max  target_dist_m\n";
+  out << " sample  mean_residual  clearance_m (nominal -> projected)  speed_max  accel_max  target_dist_m\n";
   const int shown = std::min(s.batch, 12);
-  for (int b = 0; b < s.batch; ++b) {
+  // Clearance of a trajectory: distance to the nearest obstacle disk over the horizon (negative = inside).
+  auto clearance = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& y, int b) {
+    double c_min = INFINITY;
+    for (int k = 0; k < s.steps; ++k)
+      for (int j = 0; j < s.obstacles; ++j) {
+        const double t = basis.times(k);
+        const double ox = c.problem.obstacles(b, 4 * j) + c.problem.obstacles(b, 4 * j + 2) * t;
+        const double oy = c.problem.obstacles(b, 4 * j + 1) + c.problem.obstacles(b, 4 * j + 3) * t;
+        c_min = std::min(c_min, std::hypot(x(k) - ox, y(k) - oy) - s.obstacle_radius);
+      }
+    return c_min;
+  };
+  for (int b = 0; b < shown; ++b) {
     const Eigen::VectorXd cx = result.xi.row(b).head(n).transpose().template cast<double>();
     const Eigen::VectorXd cy = result.xi.row(b).tail(n).transpose().template cast<double>();
     const Eigen::VectorXd x = basis.P * cx, y = basis.P * cy;
     const Eigen::VectorXd vx = basis.Pd * cx, vy = basis.Pd * cy;
     const Eigen::VectorXd ax = basis.Pdd * cx, ay = basis.Pdd * cy;
-    double clearance = INFINITY, dist_min = INFINITY, dist_max = 0.0;
+    const Eigen::VectorXd nx = basis.P * c.problem.xi_bar.row(b).head(n).transpose();
+    const Eigen::VectorXd ny = basis.P * c.problem.xi_bar.row(b).tail(n).transpose();
+    double dist_min = INFINITY, dist_max = 0.0;
     for (int k = 0; k < s.steps; ++k) {
       const double t = basis.times(k);
-      for (int j = 0; j < s.obstacles; ++j) {
-        const double ox = c.problem.obstacles(b, 4 * j) + c.problem.obstacles(b, 4 * j + 2) * t;
-        const double oy = c.problem.obstacles(b, 4 * j + 1) + c.problem.obstacles(b, 4 * j + 3) * t;
-        clearance = std::min(clearance, std::hypot(x(k) - ox, y(k) - oy) - s.obstacle_radius);
-      }
       const double d = std::hypot(x(k) - c.problem.target(b, 0) - c.problem.target(b, 2) * t,
                                   y(k) - c.problem.target(b, 1) - c.problem.target(b, 3) * t);
       dist_min = std::min(dist_min, d);
@@ -75,14 +84,14 @@ void print_summary(std::ostream& out, const io::ProjectionCase& c, const project
     }
     const double speed = (vx.array().square() + vy.array().square()).sqrt().maxCoeff();
     const double accel = (ax.array().square() + ay.array().square()).sqrt().maxCoeff();
-    if (b < shown) {
-      std::snprintf(line, sizeof line, " %6d  %8.4f  %11.3f  %9.3f  %9.3f  %5.2f..%-5.2f\n", b,
-                    static_cast<double>(result.residual(b)), clearance, speed, accel, dist_min, dist_max);
-      out << line;
-    }
+    std::snprintf(line, sizeof line, " %6d  %13.4f  %14.3f -> %-17.3f  %9.3f  %9.3f  %5.2f..%-5.2f\n", b,
+                  static_cast<double>(result.residual(b)), clearance(nx, ny, b), clearance(x, y, b), speed, accel,
+                  dist_min, dist_max);
+    out << line;
   }
   if (shown < s.batch) out << " (" << s.batch - shown << " more samples not shown)\n";
-  out << " clearance_m: distance to the nearest obstacle disk (negative = inside); bounds: speed "
+  out << " clearance_m: distance to the nearest obstacle disk of the nominal trajectory xi_bar and of the\n"
+      << " projected one (negative = inside); bounds: speed "
       << s.speed_min << ".." << s.speed_max << " m/s, acceleration " << s.accel_max << " m/s^2\n";
 }
 

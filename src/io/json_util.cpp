@@ -54,6 +54,8 @@ double JsonReader::number(const json& value, const std::string& path) const {
 
 int JsonReader::integer(const json& value, const std::string& path) const {
   if (!value.is_number_integer()) fail(path, "must be an integer, got " + describe(value));
+  if (value.is_number_unsigned() && value.get<unsigned long long>() > 1000000000ULL)
+    fail(path, "integer out of range: " + describe(value));
   const auto x = value.get<long long>();
   if (x < -1000000000LL || x > 1000000000LL) fail(path, "integer out of range: " + describe(value));
   return static_cast<int>(x);
@@ -77,7 +79,10 @@ std::vector<double> JsonReader::numbers(const json& value, const std::string& pa
 json parse_json_text(const std::string& text, const std::string& source) {
   try {
     return json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::out_of_range& e) {
+    // nlohmann reports a number beyond double's range (1e400) here.
+    throw InputError(source + ": a number is not finite or out of range (" + e.what() + ")");
+  } catch (const json::exception& e) {
     throw InputError(source + ": not valid JSON (" + e.what() + ")");
   }
 }

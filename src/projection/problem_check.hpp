@@ -45,11 +45,15 @@ bool check_problem(const Settings& s, const Problem<T>& p, std::string* error) {
     const char* name;
     int cols;
   };
-  const Field fields[] = {{&p.robot_velocity, "robot_velocity", 2}, {&p.obstacles, "obstacles", 4 * s.obstacles},
-                          {&p.target, "target", 4},                 {&p.terminal, "terminal", 4},
-                          {&p.via_points, "via_points", 4},         {&p.lambda0, "lambda0", n2},
-                          {&p.distance_min, "distance_min", m},     {&p.distance_max, "distance_max", m},
-                          {&p.xi_bar, "xi_bar", n2}};
+  const Field fields[] = {{&p.robot_velocity, "problem.robot_velocity", 2},
+                          {&p.obstacles, "problem.obstacles", 4 * s.obstacles},
+                          {&p.target, "problem.target", 4},
+                          {&p.terminal, "problem.terminal", 4},
+                          {&p.via_points, "problem.via_points", 4},
+                          {&p.lambda0, "problem.lambda0", n2},
+                          {&p.distance_min, "problem.distance_min", m},
+                          {&p.distance_max, "problem.distance_max", m},
+                          {&p.xi_bar, "problem.xi_bar", n2}};
   for (const Field& f : fields)
     if (!check_shape(*f.matrix, f.name, B, f.cols, error)) return false;
   for (const Field& f : fields)

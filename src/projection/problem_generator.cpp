@@ -67,12 +67,27 @@ void fill_random_problem(const Settings& s, const RandomProblemOptions& options,
       problem.obstacles(b, 4 * j + 3) = T(scan[j].vy);
     }
     problem.target.row(b) << T(xr), T(yr), T(vxr), T(vyr);
-    const double txf = xf + normal(1.0), tyf = yf + normal(1.0);
+    // Terminal and via points away from the obstacle disks (they are constraints, and a planner would not
+    // ask for a position inside an obstacle); redrawn a few times, then kept as they are.
+    auto clear = [&](double x, double y) {
+      for (const Point& p : scan)
+        if (std::hypot(x - p.x, y - p.y) < s.obstacle_radius + 0.3) return false;
+      return true;
+    };
+    const double f1 = double(s.via_step_1) / (m - 1), f2 = double(s.via_step_2) / (m - 1);
+    double txf = 0, tyf = 0, x1 = 0, y1 = 0, x2 = 0, y2 = 0;
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      txf = xf + normal(1.0);
+      tyf = yf + normal(1.0);
+      x1 = f1 * txf + normal(0.5);
+      y1 = f1 * tyf + normal(0.5);
+      x2 = f2 * txf + normal(0.5);
+      y2 = f2 * tyf + normal(0.5);
+      if (clear(txf, tyf) && clear(x1, y1) && clear(x2, y2)) break;
+    }
     problem.terminal.row(b) << T(txf), T(tyf), T(std::clamp(vxr + normal(0.3), -s.speed_max, s.speed_max)),
         T(std::clamp(vyr + normal(0.3), -s.speed_max, s.speed_max));
-    const double f1 = double(s.via_step_1) / (m - 1), f2 = double(s.via_step_2) / (m - 1);
-    problem.via_points.row(b) << T(f1 * txf + normal(0.5)), T(f1 * tyf + normal(0.5)), T(f2 * txf + normal(0.5)),
-        T(f2 * tyf + normal(0.5));
+    problem.via_points.row(b) << T(x1), T(y1), T(x2), T(y2);
     for (int i = 0; i < 2 * n; ++i) problem.lambda0(b, i) = T(normal(0.1));
     const double d_min = 1.0 + uniform(0.0, 0.5), d_max = d_min + uniform(1.0, 2.5);
     problem.distance_min.row(b).setConstant(T(d_min));

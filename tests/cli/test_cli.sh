@@ -1,0 +1,281 @@
+#!/usr/bin/env bash
+# End-to-end checks of the occtrack command-line tool.
+#
+#   bash tests/cli/test_cli.sh PATH/TO/occtrack PATH/TO/tests/data
+#
+# Runs `occtrack project` on the valid edge case and on broken copies of it (written to a temporary folder),
+# and `occtrack bench projection` with good and bad options. Prints one line per check, then
+# "N passed, M failed"; exits 1 when any check failed. Needs python3 (json module) to write and read JSON.
+set -u
+
+if [ $# -lt 2 ]; then
+  echo "usage: $0 OCCTRACK_BINARY TEST_DATA_DIR" >&2
+  exit 2
+fi
+occtrack=$1
+data=$2
+case_file="$data/conformance/projection/edge_b3_o5_k10.json"
+
+if [ ! -x "$occtrack" ]; then
+  echo "error: $occtrack is not an executable" >&2
+  exit 2
+fi
+if [ ! -r "$case_file" ]; then
+  echo "error: cannot read $case_file" >&2
+  exit 2
+fi
+if ! command -v python3 >/dev/null 2>&1; then
+  echo "error: python3 is needed to write and read JSON" >&2
+  exit 2
+fi
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/occtrack_cli.XXXXXX") || { echo "error: mktemp failed" >&2; exit 2; }
+trap 'rm -rf -- "$tmp"' EXIT
+
+passed=0
+failed=0
+pass() { passed=$((passed + 1)); echo "ok   - $1"; }
+fail() {
+  failed=$((failed + 1))
+  echo "FAIL - $1"
+  shift
+  local detail
+  for detail in "$@"; do printf '       %s\n' "$detail"; done
+}
+
+# Runs the tool with a time limit; leaves the exit status in $rc, the output in $tmp/out and $tmp/err.
+run_tool() {
+  if command -v timeout >/dev/null 2>&1; then
+    timeout 120 "$occtrack" "$@" >"$tmp/out" 2>"$tmp/err" </dev/null
+  else
+    "$occtrack" "$@" >"$tmp/out" 2>"$tmp/err" </dev/null
+  fi
+  rc=$?
+}
+
+# The last lines of a captured file, made safe to print (no control characters, bounded length).
+tail_of() { tail -n 5 -- "$1" 2>/dev/null | LC_ALL=C tr -c '[:print:]\n' '?' | cut -c1-300; }
+
+# Writes a mutated copy of the valid case: mutate NAME 'python statements on d (the parsed document)'.
+# Prints the new file's path.
+mutate() {
+  local out="$tmp/$1.json"
+  if ! python3 - "$case_file" "$out" "$2" <<'PY'
+import json, sys
+src, dst, code = sys.argv[1], sys.argv[2], sys.argv[3]
+with open(src) as f:
+    d = json.load(f)
+exec(code, {"d": d, "json": json})
+with open(dst, "w") as f:
+    json.dump(d, f)
+PY
+  then
+    echo "error: could not write the mutated case $1" >&2
+  fi
+  printf '%s\n' "$out"
+}
+
+# json_check FILE 'python expression on d' -> exit 0 when FILE is JSON and the expression is true.
+json_check() {
+  python3 - "$1" "$2" <<'PY' 2>/dev/null
+import json, math, sys
+try:
+    with open(sys.argv[1]) as f:
+        d = json.load(f)
+    ok = eval(sys.argv[2], {"d": d, "math": math, "isinstance": isinstance, "len": len, "all": all,
+                            "float": float, "int": int, "dict": dict, "list": list})
+except Exception:
+    sys.exit(1)
+sys.exit(0 if ok else 1)
+PY
+}
+
+contains() { grep -F -q -- "$2" "$1" 2>/dev/null; }
+
+# The shape of a projection result for the edge case: B = 3, 2n = 22, finite numbers.
+result_ok='(isinstance(d, dict) and all(k in d for k in ("xi_init", "xi", "residual"))
+  and len(d["xi"]) == 3 and all(len(r) == 22 for r in d["xi"]) and len(d["xi_init"]) == 3
+  and all(len(r) == 22 for r in d["xi_init"]) and len(d["residual"]) == 3
+  and all(isinstance(x, (int, float)) and math.isfinite(x) for r in d["xi"] for x in r)
+  and all(isinstance(x, (int, float)) and math.isfinite(x) for x in d["residual"]))'
+
+# ------------------------------------------------------------------------------------------------------------
+# Valid runs.
+
+run_tool project "$case_file"
+if [ "$rc" -eq 0 ]; then pass "project valid case exits 0"; else fail "project valid case exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if json_check "$tmp/out" "$result_ok"; then
+  pass "project valid case prints JSON with xi_init, xi, residual (3 x 22, 3) on stdout"
+else
+  fail "project valid case prints JSON with xi_init, xi, residual on stdout" "$(tail_of "$tmp/out")"
+fi
+if contains "$tmp/err" "PASS"; then pass "project valid case reports PASS against expected"; else fail "project valid case reports PASS" "$(tail_of "$tmp/err")"; fi
+
+run_tool project "$case_file" --precision float
+if [ "$rc" -eq 0 ]; then pass "project --precision float exits 0"; else fail "project --precision float exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if json_check "$tmp/out" "$result_ok"; then pass "project --precision float prints the result JSON"; else fail "project --precision float prints the result JSON" "$(tail_of "$tmp/out")"; fi
+
+run_tool project "$case_file" --precision double --tolerance 1e-9
+if [ "$rc" -eq 0 ]; then pass "project --precision double --tolerance 1e-9 exits 0"; else fail "project --precision double --tolerance 1e-9 exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+
+result_file="$tmp/result.json"
+run_tool project "$case_file" --out "$result_file"
+if [ "$rc" -eq 0 ]; then pass "project --out exits 0"; else fail "project --out exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if [ -f "$result_file" ] && json_check "$result_file" "$result_ok"; then
+  pass "project --out writes the result JSON to the file"
+else
+  fail "project --out writes the result JSON to the file" "$(tail_of "$result_file")"
+fi
+if contains "$tmp/out" "result written to"; then pass "project --out says where the result went"; else fail "project --out says where the result went" "$(tail_of "$tmp/out")"; fi
+
+unwritable="$tmp/no_such_dir/result.json"
+run_tool project "$case_file" --out "$unwritable"
+if [ "$rc" -eq 1 ]; then pass "project --out into a missing folder exits 1"; else fail "project --out into a missing folder exits 1 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "$unwritable"; then pass "project --out into a missing folder: stderr names the file"; else fail "project --out into a missing folder: stderr names the file" "$(tail_of "$tmp/err")"; fi
+
+no_expected=$(mutate no_expected 'del d["expected"]')
+run_tool project "$no_expected"
+if [ "$rc" -eq 0 ] && json_check "$tmp/out" "$result_ok"; then
+  pass "project on a case without expected outputs exits 0 with the result"
+else
+  fail "project on a case without expected outputs exits 0 (got $rc)" "$(tail_of "$tmp/err")"
+fi
+
+# ------------------------------------------------------------------------------------------------------------
+# Broken cases: exit 1, and stderr names the file and the key.
+
+expect_refused() {  # expect_refused LABEL CASE_PATH KEY [RULE]
+  local label=$1 path=$2 key=$3 rule=${4:-}
+  run_tool project "$path"
+  if [ "$rc" -eq 1 ]; then pass "$label: exits 1"; else fail "$label: exits 1 (got $rc)" "$(tail_of "$tmp/err")"; fi
+  if contains "$tmp/err" "$key"; then pass "$label: stderr names $key"; else fail "$label: stderr names $key" "$(tail_of "$tmp/err")"; fi
+  if contains "$tmp/err" "$path"; then pass "$label: stderr names the file"; else fail "$label: stderr names the file $path" "$(tail_of "$tmp/err")"; fi
+  if [ -n "$rule" ]; then
+    if contains "$tmp/err" "$rule"; then pass "$label: stderr states the rule"; else fail "$label: stderr states \"$rule\"" "$(tail_of "$tmp/err")"; fi
+  fi
+  if [ -s "$tmp/out" ]; then fail "$label: nothing on stdout" "$(tail_of "$tmp/out")"; else pass "$label: nothing on stdout"; fi
+}
+
+expect_refused "missing config.horizon" "$(mutate missing_horizon 'del d["config"]["horizon"]')" \
+  "config.horizon" "missing required key"
+expect_refused "missing inputs.target" "$(mutate missing_target 'del d["inputs"]["target"]')" \
+  "inputs.target" "missing required key"
+expect_refused "missing format" "$(mutate missing_format 'del d["format"]')" "format" "missing required key"
+expect_refused "unknown key in config" "$(mutate unknown_config 'd["config"]["batch"] = 3')" \
+  "config.batch" "unknown key"
+expect_refused "unknown key in inputs" "$(mutate unknown_inputs 'd["inputs"]["extra"] = []')" \
+  "inputs.extra" "unknown key"
+expect_refused "unknown top-level key" "$(mutate unknown_top 'd["comment"] = "x"')" "comment" "unknown key"
+expect_refused "target row with 3 numbers" "$(mutate short_target 'd["inputs"]["target"][1].pop()')" \
+  "inputs.target[1]" "expected 4 numbers, got 3"
+expect_refused "distance_min with 2 samples" "$(mutate short_distance 'd["inputs"]["distance_min"].pop()')" \
+  "inputs.distance_min" "expected 3 samples"
+expect_refused "obstacles sample with 4 points" "$(mutate short_obstacles 'd["inputs"]["obstacles"][2].pop()')" \
+  "inputs.obstacles[2]" "expected 5 points"
+expect_refused "lambda0 row of 21" "$(mutate short_lambda 'd["inputs"]["lambda0"][0].pop()')" \
+  "inputs.lambda0[0]" "expected 22 numbers, got 21"
+expect_refused "\"nan\" string in target" "$(mutate nan_target 'd["inputs"]["target"][0][0] = "nan"')" \
+  "inputs.target[0][0]" "must be a number"
+expect_refused "null in obstacles" "$(mutate null_obstacle 'd["inputs"]["obstacles"][0][0][0] = None')" \
+  "inputs.obstacles[0][0][0]" "must be a number"
+expect_refused "negative config.steps" "$(mutate negative_steps 'd["config"]["steps"] = -5')" \
+  "config.steps" "must be between 4 and 10000"
+expect_refused "negative config.degree" "$(mutate negative_degree 'd["config"]["degree"] = -1')" \
+  "config.degree" "must be between 5 and 30"
+expect_refused "zero config.iterations" "$(mutate zero_iterations 'd["config"]["iterations"] = 0')" \
+  "config.iterations" "must be between 1 and 1000000"
+expect_refused "negative config.obstacle_radius" "$(mutate negative_radius 'd["config"]["obstacle_radius"] = -0.4')" \
+  "config.obstacle_radius" "must be positive"
+expect_refused "negative config.horizon" "$(mutate negative_horizon 'd["config"]["horizon"] = -5.0')" \
+  "config.horizon" "must be positive"
+expect_refused "speed_min above speed_max" \
+  "$(mutate speed_bounds 'd["config"]["speed_min"] = 3.0; d["config"]["speed_max"] = 2.0')" \
+  "config.speed_min" "must not exceed speed_max"
+expect_refused "via_steps decreasing" "$(mutate via_decreasing 'd["config"]["via_steps"] = [74, 49]')" \
+  "config.via_steps[1]" "must be greater than via_step_1"
+expect_refused "via_steps outside the horizon" "$(mutate via_outside 'd["config"]["via_steps"] = [49, 150]')" \
+  "config.via_steps[1]" "at most steps - 2"
+expect_refused "wrong format tag" "$(mutate wrong_format 'd["format"] = "occtrack.projection-case.v0"')" \
+  "format" "occtrack.projection-case.v1"
+
+bad_text="$tmp/not_json.json"
+head -c 500 "$case_file" >"$bad_text"
+expect_refused "truncated JSON text" "$bad_text" "not valid JSON"
+
+# 1e400 overflows a double; the JSON parser refuses it. The message must still name the file.
+overflow="$tmp/overflow.json"
+python3 - "$case_file" "$overflow" <<'PY' || echo "error: could not write $overflow" >&2
+import json, sys
+with open(sys.argv[1]) as f:
+    d = json.load(f)
+d["config"]["horizon"] = 12345.678
+text = json.dumps(d).replace("12345.678", "1e400", 1)
+with open(sys.argv[2], "w") as f:
+    f.write(text)
+PY
+run_tool project "$overflow"
+if [ "$rc" -eq 1 ]; then pass "number 1e400: exits 1"; else fail "number 1e400: exits 1 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "$overflow"; then pass "number 1e400: stderr names the file"; else fail "number 1e400: stderr names the file $overflow" "$(tail_of "$tmp/err")"; fi
+
+missing="$tmp/does_not_exist.json"
+run_tool project "$missing"
+if [ "$rc" -eq 1 ]; then pass "missing case file: exits 1"; else fail "missing case file: exits 1 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "$missing"; then pass "missing case file: stderr names the file"; else fail "missing case file: stderr names the file" "$(tail_of "$tmp/err")"; fi
+
+# A value that fits in double but not in float: refused by the float solve, naming the field.
+float_overflow=$(mutate float_overflow 'd["inputs"]["target"][1][2] = 1e39')
+run_tool project "$float_overflow" --precision float
+if [ "$rc" -eq 1 ]; then pass "target 1e39 with --precision float: exits 1"; else fail "target 1e39 with --precision float: exits 1 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "target"; then pass "target 1e39 with --precision float: stderr names target"; else fail "target 1e39 with --precision float: stderr names target" "$(tail_of "$tmp/err")"; fi
+
+# ------------------------------------------------------------------------------------------------------------
+# Bad options.
+
+run_tool project "$case_file" --precision quad
+if [ "$rc" -ne 0 ]; then pass "project --precision quad exits non-zero ($rc)"; else fail "project --precision quad exits non-zero"; fi
+if contains "$tmp/err" "quad"; then pass "project --precision quad: stderr names the value"; else fail "project --precision quad: stderr names the value" "$(tail_of "$tmp/err")"; fi
+
+run_tool project "$case_file" --tolerance -1
+if [ "$rc" -ne 0 ]; then pass "project --tolerance -1 exits non-zero ($rc)"; else fail "project --tolerance -1 exits non-zero"; fi
+
+run_tool project
+if [ "$rc" -ne 0 ]; then pass "project without a case exits non-zero ($rc)"; else fail "project without a case exits non-zero"; fi
+
+run_tool
+if [ "$rc" -ne 0 ]; then pass "no subcommand exits non-zero ($rc)"; else fail "no subcommand exits non-zero"; fi
+
+# ------------------------------------------------------------------------------------------------------------
+# Mismatch against expected outputs: exit 3 and FAIL.
+
+mismatch=$(mutate mismatch 'd["expected"]["residual"][0] += 1.0; d["expected"]["xi"][1][3] += 0.5')
+run_tool project "$mismatch"
+if [ "$rc" -eq 3 ]; then pass "wrong expected value: exits 3"; else fail "wrong expected value: exits 3 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "FAIL" || contains "$tmp/out" "FAIL"; then pass "wrong expected value: prints FAIL"; else fail "wrong expected value: prints FAIL" "$(tail_of "$tmp/err")"; fi
+if json_check "$tmp/out" "$result_ok"; then pass "wrong expected value: still prints the result JSON"; else fail "wrong expected value: still prints the result JSON" "$(tail_of "$tmp/out")"; fi
+
+run_tool project "$mismatch" --out "$tmp/mismatch_result.json"
+if [ "$rc" -eq 3 ] && contains "$tmp/out" "FAIL"; then pass "wrong expected value with --out: exits 3 and prints FAIL"; else fail "wrong expected value with --out: exits 3 and prints FAIL (got $rc)" "$(tail_of "$tmp/out")"; fi
+
+# ------------------------------------------------------------------------------------------------------------
+# Benchmark.
+
+run_tool bench projection --batch 5 --repeats 3 --json
+if [ "$rc" -eq 0 ]; then pass "bench projection --json exits 0"; else fail "bench projection --json exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if json_check "$tmp/out" 'isinstance(d, dict) and all(isinstance(d.get(k), (int, float)) and math.isfinite(d[k]) and d[k] >= 0 for k in ("median_ms", "p99_ms")) and d["p99_ms"] >= d["median_ms"] and d.get("batch") == 5 and d.get("repeats") == 3'; then
+  pass "bench projection --json prints an object with median_ms <= p99_ms"
+else
+  fail "bench projection --json prints an object with median_ms and p99_ms" "$(tail_of "$tmp/out")"
+fi
+
+run_tool bench projection --batch 0
+if [ "$rc" -ne 0 ]; then pass "bench projection --batch 0 exits non-zero ($rc)"; else fail "bench projection --batch 0 exits non-zero"; fi
+if contains "$tmp/err" "--batch"; then pass "bench projection --batch 0: stderr names --batch"; else fail "bench projection --batch 0: stderr names --batch" "$(tail_of "$tmp/err")"; fi
+
+run_tool bench projection --batch 2 --repeats 1 --precision half
+if [ "$rc" -ne 0 ]; then pass "bench projection --precision half exits non-zero ($rc)"; else fail "bench projection --precision half exits non-zero"; fi
+
+run_tool bench
+if [ "$rc" -ne 0 ]; then pass "bench without a benchmark exits non-zero ($rc)"; else fail "bench without a benchmark exits non-zero"; fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
