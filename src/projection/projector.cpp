@@ -70,9 +70,10 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 // the coefficients, and a 0/1 mask keeps them out of the residual.
 template <typename T>
 struct Projector<T>::Impl {
-  // Samples are solved in blocks of at most this many: a block's matrices stay in the L2 cache through
-  // all K iterations, and the products' scratch space stays small enough for Eigen to keep on the stack.
-  static constexpr int kBlock = 32;
+  // Samples are solved in blocks of at most this many: a block's matrices stay in the L1/L2 cache through
+  // all K iterations, and the scratch space of the products (G' S: 3 mp x 2 kBlock doubles) stays under
+  // Eigen's 128 KB stack limit, so that no solve allocates (tests/test_no_allocation.cpp).
+  static constexpr int kBlock = 16;
 
   struct Workspace {
     int first = 0, count = 0;  // this thread's samples [first, first + count), solved kBlock at a time
