@@ -41,8 +41,11 @@ namespace {
 using namespace occtrack::projection;
 
 template <typename T>
-long allocations_during_solve(int batch, int obstacles, bool history) {
+long allocations_during_solve(int batch, int obstacles, bool history, int steps = 100) {
   Settings s;
+  s.steps = steps;
+  s.via_step_1 = steps / 2 - 1;
+  s.via_step_2 = 3 * steps / 4 - 1;
   s.batch = batch;
   s.obstacles = obstacles;
   s.iterations = 10;
@@ -68,6 +71,9 @@ TEST(NoAllocation, SolveDoesNotAllocateInFloatOrDouble) {
     EXPECT_EQ(allocations_during_solve<double>(batch, 60, true), 0) << "double, batch " << batch;
   }
   EXPECT_EQ(allocations_during_solve<float>(30, 0, false), 0) << "no obstacle points";
+  // Longer horizons shrink the blocks so that the products' scratch space stays on the stack.
+  EXPECT_EQ(allocations_during_solve<double>(40, 20, false, 1000), 0) << "double, 1000 steps";
+  EXPECT_EQ(allocations_during_solve<float>(40, 20, false, 5000), 0) << "float, 5000 steps";
 }
 
 TEST(NoAllocation, TheWitnessesWork) {

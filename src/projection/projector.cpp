@@ -70,13 +70,14 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 // the coefficients, and a 0/1 mask keeps them out of the residual.
 template <typename T>
 struct Projector<T>::Impl {
-  // Samples are solved in blocks of at most this many: a block's matrices stay in the L1/L2 cache through
-  // all K iterations, and the scratch space of the products (G' S: 3 mp x 2 kBlock doubles) stays under
-  // Eigen's 128 KB stack limit, so that no solve allocates (tests/test_no_allocation.cpp).
-  static constexpr int kBlock = 16;
+  // Samples are solved in blocks: a block's matrices stay in the L1/L2 cache through all K iterations,
+  // and the scratch space of its largest product (G' S, 3 mp x 2 block values) stays under Eigen's 128 KB
+  // stack limit, so that no solve allocates (tests/test_no_allocation.cpp). 16 samples with the defaults.
+  static constexpr int kMaxBlock = 16;
+  static constexpr std::size_t kScratchBudget = 96 * 1024;
 
   struct Workspace {
-    int first = 0, count = 0;  // this thread's samples [first, first + count), solved kBlock at a time
+    int first = 0, count = 0;  // this thread's samples [first, first + count), solved a block at a time
     int block_first = 0, block_count = 0;  // the block in hand
     Matrix<T> C, C_next, Lambda, Bias, Rhs, H;  // n x 2count
     Matrix<T> Eval;                              // 3 mp x 2count: p, pd, pdd at every padded step
@@ -89,6 +90,7 @@ struct Projector<T>::Impl {
 
   Settings settings;
   int n = 0, m = 0, mp = 0, Np = 0;
+  int block_size = 1;  // samples per block
   Matrix<T> G;             // 3 mp x n: [P; Pd; Pdd], padded with zero rows
   Matrix<T> M11;           // n x n: top-left block of the inverse projection KKT matrix
   Matrix<T> M11_Qm;        // n x n: M11 (Q - rho_p I)
@@ -117,13 +119,15 @@ struct Projector<T>::Impl {
     mask.setZero(mp);
     mask.head(m).setOnes();
 
+    const std::size_t per_sample = 3 * static_cast<std::size_t>(mp) * 2 * sizeof(T);
+    block_size = static_cast<int>(std::clamp<std::size_t>(kScratchBudget / per_sample, 1, kMaxBlock));
     const int threads = std::min(settings.threads, settings.batch);
     workspaces.resize(threads);
     for (int t = 0; t < threads; ++t) {
       Workspace& w = workspaces[t];
       w.first = settings.batch * t / threads;
       w.count = settings.batch * (t + 1) / threads - w.first;
-      const int block = std::min(w.count, kBlock);
+      const int block = std::min(w.count, block_size);
       const int cols = 2 * block;
       for (Matrix<T>* M : {&w.C, &w.C_next, &w.Lambda, &w.Bias, &w.Rhs, &w.H}) M->setZero(n, cols);
       w.Eval.setZero(3 * mp, cols);
@@ -267,9 +271,9 @@ struct Projector<T>::Impl {
   }
 
   void solve_chunk(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
-    for (int first = w.first; first < w.first + w.count; first += kBlock) {
+    for (int first = w.first; first < w.first + w.count; first += block_size) {
       w.block_first = first;
-      w.block_count = std::min(kBlock, w.first + w.count - first);
+      w.block_count = std::min(block_size, w.first + w.count - first);
       prepare_block(problem, w, result);
       iterate_block(problem, w, result);
     }
