@@ -8,6 +8,9 @@ namespace occtrack::app {
 
 void add_project_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
+void add_bench_suite_command(CLI::App& bench, int& exit_code);
+void add_run_command(CLI::App& app, int& exit_code);
+void add_scenario_command(CLI::App& app, int& exit_code);
 
 // Exit codes shared by the subcommands.
 inline constexpr int kExitOk = 0;

@@ -10,6 +10,8 @@ int main(int argc, char** argv) {
   int exit_code = occtrack::app::kExitOk;
   occtrack::app::add_project_command(app, exit_code);
   occtrack::app::add_bench_command(app, exit_code);
+  occtrack::app::add_run_command(app, exit_code);
+  occtrack::app::add_scenario_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

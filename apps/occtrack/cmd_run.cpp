@@ -1,0 +1,81 @@
+// occtrack run SCENARIO --planner NAME [--svg FILE] [--json FILE]
+//
+// Runs one closed-loop episode with a progress display and prints its metrics.
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include "commands.hpp"
+#include "episode_common.hpp"
+#include "occtrack/io/results.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/io/svg.hpp"
+#include "occtrack/sim/episode.hpp"
+
+namespace occtrack::app {
+
+namespace {
+
+struct RunOptions {
+  std::string scenario_path, svg_path, json_path;
+  EpisodeCliOptions episode;
+};
+
+bool write_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  if (out << text) return true;
+  std::cerr << "occtrack run: " << path << ": cannot write the file\n";
+  return false;
+}
+
+int run(const RunOptions& o) {
+  const core::Scenario scenario = io::read_scenario(o.scenario_path);
+  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_options);
+  sim::EpisodeSettings settings;
+  settings.delay_by_compute = o.episode.delay;
+  settings.seed = o.episode.sensor_seed;
+  Progress progress(scenario.name + " (" + planner->name() + ")");
+  const sim::EpisodeResult result =
+      sim::run_episode(scenario, *planner, settings, [&](double f) { progress.update(f); });
+  const auto& m = result.metrics;
+  std::printf("%s with %s: %.1f s simulated\n", m.scenario.c_str(), m.planner.c_str(), m.duration_s);
+  std::printf("  occlusion time   %.2f s (%s)\n", m.occlusion_time_s, m.success ? "success" : "occluded");
+  std::printf("  collisions       %d (%.2f s in collision, min clearance %.2f m)\n", m.collisions,
+              m.collision_time_s, m.min_clearance_m);
+  std::printf("  acceleration     mean %.2f, min %.2f, max %.2f m/s^2\n", m.acceleration.mean, m.acceleration.min,
+              m.acceleration.max);
+  std::printf("  compute          median %.2f, p99 %.2f, max %.2f ms per cycle (%d cycles, %d failed)\n",
+              m.compute_ms.median, m.compute_ms.p99, m.compute_ms.max, m.cycles, m.planner_failures);
+  std::printf("  tracking         mean distance %.2f m, %.0f%% of the time in [%.1f, %.1f] m; target out of range "
+              "%.1f s\n",
+              m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,
+              m.target_out_of_range_s);
+  bool ok = true;
+  if (!o.json_path.empty()) ok = write_file(o.json_path, io::episode_json(m) + "\n") && ok;
+  if (!o.svg_path.empty()) {
+    ok = write_file(o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
+    if (ok) std::printf("  figure           %s\n", o.svg_path.c_str());
+  }
+  return ok ? kExitOk : kExitInputError;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<RunOptions>();
+  CLI::App* cmd = app.add_subcommand("run", "Run one closed-loop tracking episode and print its metrics");
+  cmd->add_option("scenario", o->scenario_path, "Scenario file (occtrack.scenario.v1 YAML)")->required();
+  add_episode_options(cmd, o->episode);
+  cmd->add_option("--svg", o->svg_path, "Write a top-down figure of the episode");
+  cmd->add_option("--json", o->json_path, "Write the episode's metrics as JSON");
+  cmd->callback([o, &exit_code]() {
+    try {
+      exit_code = run(*o);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack run: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+}
+
+}  // namespace occtrack::app

@@ -1,0 +1,207 @@
+// occtrack scenario generate --suite NAME|all --out DIR [--seed S] [--episodes N] [--duration SECONDS]
+// occtrack scenario generate --kind forest|boxes|mixed --seed S --target-speed V --duration D --out FILE
+//                            [--obstacles N] [--moving-obstacles N]
+//
+// Writes the benchmark suites of shared/spec/simulation.md as scenario files (DIR/<suite>/<world>-<k>.yaml),
+// or one scenario of a freshly generated world. Each file written gets one line: its obstacles, the target's
+// path, and how long a robot on a 2 m leash would lose sight of the target (a measure of the occlusion the
+// scenario holds). Seeds 1000-1999 are the benchmark's (scenarios/README.md); training uses other seeds.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "commands.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
+
+namespace occtrack::app {
+
+namespace {
+
+struct Options {
+  std::string suite;
+  std::string kind;
+  std::string out;
+  std::optional<std::uint64_t> seed;
+  std::optional<int> episodes;
+  std::optional<double> duration;
+  double target_speed = 1.0;
+  std::optional<int> obstacles;
+  int moving_obstacles = 0;
+};
+
+struct Summary {
+  int files = 0;
+  std::uintmax_t bytes = 0;
+  double duration = 0.0, occluded = 0.0;
+  int events = 0;
+};
+
+double path_length(const core::Scenario& s) {
+  double length = 0.0;
+  for (std::size_t k = 1; k < s.target.size(); ++k) length += (s.target[k].position - s.target[k - 1].position).norm();
+  return length;
+}
+
+double top_speed(const core::Scenario& s) {
+  double top = 0.0;
+  for (std::size_t k = 1; k < s.target.size(); ++k)
+    top = std::max(top, (s.target[k].position - s.target[k - 1].position).norm() /
+                            (s.target[k].time - s.target[k - 1].time));
+  return top;
+}
+
+void write_scenario(const core::Scenario& s, const std::filesystem::path& path, Summary& summary) {
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  const std::string text = io::scenario_yaml(s);
+  std::ofstream file(path, std::ios::binary);
+  if (!file || !(file << text) || !(file.flush()))
+    throw std::runtime_error("cannot write " + path.string());
+  int moving = 0;
+  for (const core::ObstacleSpec& o : s.obstacles) moving += o.moving() ? 1 : 0;
+  const sim::OcclusionProfile occlusion = sim::leash_follower_occlusion(s);
+  std::printf("wrote %s: %zu obstacles (%d moving), %zu waypoints over %.0f s, path %.0f m, top speed %.2f m/s; "
+              "leash follower occluded %.1f s in %d stretches\n",
+              path.string().c_str(), s.obstacles.size(), moving, s.target.size(), s.duration, path_length(s),
+              top_speed(s), occlusion.occluded_time, occlusion.occlusion_events);
+  std::fflush(stdout);
+  summary.files += 1;
+  summary.bytes += text.size();
+  summary.duration += s.duration;
+  summary.occluded += occlusion.occluded_time;
+  summary.events += occlusion.occlusion_events;
+}
+
+void print_summary(const std::string& what, const Summary& s) {
+  std::printf("%s: %d files, %.1f kB, %.0f s of target motion; leash follower occluded %.1f s (%.1f%%) in %d "
+              "stretches\n",
+              what.c_str(), s.files, s.bytes / 1024.0, s.duration, s.occluded,
+              s.duration > 0 ? 100.0 * s.occluded / s.duration : 0.0, s.events);
+}
+
+void generate_suite(const sim::SuiteSpec& spec, const std::filesystem::path& root, Summary& total) {
+  Summary summary;
+  for (std::size_t w = 0; w < spec.worlds.size(); ++w) {
+    const sim::SuiteWorld& world_spec = spec.worlds[w];
+    const core::Scenario world = sim::generate_world(world_spec.settings, world_spec.seed);
+    for (int e = 1; e <= spec.episodes_per_world; ++e) {
+      const std::string name = world_spec.name + "-" + std::to_string(e);
+      const core::Scenario s =
+          sim::generate_episode(world, spec.target, spec.episode_seed(static_cast<int>(w), e), name);
+      write_scenario(s, root / spec.name / (name + ".yaml"), summary);
+    }
+  }
+  print_summary(spec.name, summary);
+  total.files += summary.files;
+  total.bytes += summary.bytes;
+  total.duration += summary.duration;
+  total.occluded += summary.occluded;
+  total.events += summary.events;
+}
+
+int run_suites(const Options& o) {
+  std::vector<sim::SuiteSpec> suites;
+  if (o.suite == "all") {
+    suites = sim::benchmark_suites();
+  } else if (auto spec = sim::find_suite(o.suite)) {
+    suites.push_back(*spec);
+  } else {
+    std::string names;
+    for (const sim::SuiteSpec& s : sim::benchmark_suites()) names += " " + s.name;
+    std::cerr << "occtrack scenario generate: --suite: unknown suite '" << o.suite << "'; one of:" << names
+              << " all\n";
+    return kExitInputError;
+  }
+  Summary total;
+  for (sim::SuiteSpec& spec : suites) {
+    if (o.seed) spec.episode_seed_base = *o.seed;
+    if (o.episodes) spec.episodes_per_world = *o.episodes;
+    if (o.duration) spec.target.duration = *o.duration;
+    generate_suite(spec, o.out, total);
+  }
+  if (suites.size() > 1) print_summary("all suites", total);
+  return kExitOk;
+}
+
+int run_single(const Options& o) {
+  const auto kind = sim::parse_world_kind(o.kind);
+  if (!kind) {
+    std::cerr << "occtrack scenario generate: --kind: expected forest, boxes or mixed, got '" << o.kind << "'\n";
+    return kExitInputError;
+  }
+  // The suites' worlds of the same kind, unless told otherwise.
+  sim::GeneratorSettings settings;
+  settings.style.kind = *kind;
+  settings.static_obstacles = *kind == sim::WorldKind::forest ? 90 : *kind == sim::WorldKind::boxes ? 55 : 70;
+  if (o.obstacles) settings.static_obstacles = *o.obstacles;
+  settings.moving_obstacles = o.moving_obstacles;
+  sim::TargetSettings target;
+  target.max_speed = o.target_speed;
+  target.min_speed = std::min(target.min_speed, o.target_speed);
+  if (o.duration) target.duration = *o.duration;
+  std::string error;
+  if (!settings.validate(&error) || !target.validate(&error)) {
+    std::cerr << "occtrack scenario generate: " << error << "\n";
+    return kExitInputError;
+  }
+  const std::uint64_t seed = o.seed.value_or(1);
+  const std::filesystem::path path(o.out);
+  const core::Scenario world = sim::generate_world(settings, seed);
+  // The episode's seed is derived from the world's, so that one number fixes the file.
+  const core::Scenario s = sim::generate_episode(world, target, seed ^ 0x5DEECE66Dull, path.stem().string());
+  Summary summary;
+  write_scenario(s, path, summary);
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_scenario_command(CLI::App& app, int& exit_code) {
+  CLI::App* scenario = app.add_subcommand("scenario", "Make scenario files (worlds, target paths, robot start)");
+  scenario->require_subcommand(1);
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = scenario->add_subcommand(
+      "generate",
+      "Write the benchmark suites (--suite) or one scenario (--kind) from fixed seeds. Seeds 1000-1999 are the "
+      "benchmark's; generate training data from other seeds");
+  CLI::Option* suite = cmd->add_option("--suite", o->suite,
+                                       "Suite to write into OUT/<suite>/: static-1ms, static-2ms, dynamic-1.5ms, "
+                                       "their -smoke versions, or all");
+  CLI::Option* kind = cmd->add_option("--kind", o->kind, "One scenario in a new world of this kind")
+                          ->check(CLI::IsMember({"forest", "boxes", "mixed"}));
+  suite->excludes(kind);
+  cmd->add_option("--out", o->out, "Folder holding the suite folders (--suite), or the file to write (--kind)")
+      ->required();
+  cmd->add_option("--seed", o->seed,
+                  "--suite: episode seed base (episode k of world w uses base + 20 w + k; default: the suite's); "
+                  "--kind: world seed (default 1)");
+  cmd->add_option("--episodes", o->episodes, "Episodes per world (--suite; default: the suite's)")
+      ->check(CLI::Range(1, 19));
+  cmd->add_option("--duration", o->duration, "Seconds of target motion per episode (default: the suite's, or 150)")
+      ->check(CLI::Range(0.5, 36000.0));
+  cmd->add_option("--target-speed", o->target_speed, "Largest target speed, m/s (--kind)")
+      ->check(CLI::Range(0.05, 20.0))
+      ->capture_default_str();
+  cmd->add_option("--obstacles", o->obstacles, "Static obstacles (--kind; default: as in the suites' worlds)")
+      ->check(CLI::Range(0, 100000));
+  cmd->add_option("--moving-obstacles", o->moving_obstacles, "Moving obstacles at 0.7 m/s (--kind)")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  cmd->callback([o, &exit_code]() {
+    try {
+      if (o->suite.empty() == o->kind.empty()) {
+        std::cerr << "occtrack scenario generate: give one of --suite or --kind\n";
+        exit_code = kExitInputError;
+        return;
+      }
+      exit_code = o->suite.empty() ? run_single(*o) : run_suites(*o);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack scenario generate: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+}
+
+}  // namespace occtrack::app

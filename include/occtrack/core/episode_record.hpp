@@ -1,0 +1,52 @@
+// What an episode leaves behind: its metrics (shared/spec/simulation.md, "Metrics") and a trace for
+// figures. Plain data, written by sim/episode and read by io/results and io/svg.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "occtrack/core/scenario.hpp"
+
+namespace occtrack::core {
+
+struct Summary3 {
+  double mean = 0, min = 0, max = 0;
+};
+struct TimingSummary {
+  double mean = 0, median = 0, p99 = 0, max = 0;
+};
+
+/// Per-episode metrics, with the spec's keys (io/results.hpp writes the JSON).
+struct EpisodeMetrics {
+  std::string scenario, planner;
+  double duration_s = 0;
+  double occlusion_time_s = 0;
+  bool success = false;  ///< zero occlusion time
+  int collisions = 0;    ///< entries of the robot disk into any obstacle
+  double collision_time_s = 0;
+  double min_clearance_m = 0;  ///< smallest distance between the robot disk and an obstacle (negative: overlap)
+  Summary3 acceleration;       ///< realised acceleration norm, m/s^2
+  TimingSummary compute_ms;    ///< per planning cycle
+  double tracking_distance_mean_m = 0;
+  double tracking_in_band_share = 0;
+  double target_out_of_range_s = 0;  ///< target beyond the sensor's range
+  int planner_failures = 0;          ///< cycles in which the planner returned no usable plan (the robot braked)
+  int cycles = 0;
+};
+
+struct Snapshot {
+  double time = 0;
+  Vec2 robot = Vec2::Zero(), target = Vec2::Zero();
+  std::vector<Vec2> plan;
+  std::vector<std::vector<Vec2>> candidates;
+};
+
+/// What happened, for figures: every trace_stride-th physics step.
+struct Trace {
+  std::vector<double> time;
+  std::vector<Vec2> robot, target;
+  std::vector<char> occluded;  ///< the line of sight was blocked at that instant
+  std::vector<Snapshot> snapshots;
+};
+
+}  // namespace occtrack::core

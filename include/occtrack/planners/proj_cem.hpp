@@ -1,0 +1,55 @@
+// Proj-CEM (shared/spec/policy.md, "The expert"): the cross-entropy method over trajectory coefficients,
+// with every sample projected onto the constraint set before it is scored. One settings struct covers the
+// online baseline (hundreds of samples, one core) and the offline expert that labels demonstrations
+// (thousands of samples, all cores).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/planners/ranking.hpp"
+#include "occtrack/projection/settings.hpp"
+
+namespace occtrack::planners {
+
+struct ProjCemSettings {
+  int samples = 160;             ///< per CEM iteration (the projection's batch)
+  int cem_iterations = 3;        ///< sample, project, score, refit
+  double elite_fraction = 0.1;   ///< share of samples that refit the distribution
+  double initial_std = 1.2;      ///< metres: spread of the last coefficient around the mean; grows linearly
+                                 ///< from zero at the first coefficient (the start is fixed)
+  double min_std = 0.05;         ///< metres: floor of the refitted spread
+  int candidates_kept = 24;      ///< projected samples returned for figures
+  std::uint64_t seed = 1;
+  projection::Settings projection = [] {
+    projection::Settings s;
+    s.iterations = 30;
+    return s;
+  }();
+  perception::Settings perception = [] {
+    perception::Settings s;
+    s.estimate_velocity = true;
+    return s;
+  }();
+  RankingSettings ranking;
+
+  /// The offline expert: 2500 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.
+  static ProjCemSettings offline_expert(int threads);
+};
+
+class ProjCem final : public Planner {
+ public:
+  explicit ProjCem(const ProjCemSettings& settings = {});
+  ~ProjCem() override;
+  std::string name() const override { return "projcem"; }
+  void reset() override;
+  PlannerOutput plan(const PlannerInput& input) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace occtrack::planners

@@ -1,0 +1,53 @@
+// The ranking cost that picks the plan among projected samples (shared/spec/policy.md, planning cycle
+// step 6): occlusion of the predicted line of sight, deviation from the reference tracking distance,
+// smoothness, and whatever constraint violation the projection left.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "occtrack/core/bernstein.hpp"
+#include "occtrack/core/tracking.hpp"
+#include "occtrack/projection/settings.hpp"
+
+namespace occtrack::planners {
+
+struct RankingSettings {
+  double occlusion_weight = 20.0;   ///< per squared metre of line-of-sight intrusion, summed over steps
+  double tracking_weight = 1.0;     ///< mean squared deviation from band.reference
+  double smoothness_weight = 0.02;  ///< mean squared acceleration
+  double violation_weight = 200.0;  ///< mean obstacle penetration, speed and acceleration excess
+  double occlusion_margin = 0.35;   ///< metres: a point this close to the line of sight blocks it
+  int occlusion_stride = 4;         ///< check the line of sight every this many steps
+  double late_occlusion_weight = 0.3;  ///< occlusion weight at the horizon's end, relative to its start
+  core::TrackingBand band;
+
+  bool operator==(const RankingSettings&) const = default;
+};
+
+struct RankingTerms {
+  double occlusion = 0, tracking = 0, smoothness = 0, violation = 0, total = 0;
+};
+
+using PointRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+class Ranking {
+ public:
+  Ranking(const RankingSettings& settings, const projection::Settings& projection);
+
+  /// Costs of trajectories given as coefficient rows (x coefficients, then y), robot-centric. target:
+  /// (x, y, vx, vy) robot-centric, predicted linearly. collision_points: the optimizer's obstacles (N x 4).
+  /// occlusion_points: every point that can block the view (x, y, vx, vy).
+  RankingTerms evaluate(const Eigen::RowVectorXd& xi, const Eigen::Vector4d& target, const PointRows& collision_points,
+                        const PointRows& occlusion_points) const;
+
+  const core::BernsteinBasis& basis() const { return basis_; }
+
+ private:
+  RankingSettings settings_;
+  projection::Settings projection_;
+  core::BernsteinBasis basis_;
+  Eigen::VectorXd occlusion_weights_;
+};
+
+}  // namespace occtrack::planners

@@ -1,0 +1,77 @@
+// The simulated world: obstacle shapes over time, the target's replayed path, LiDAR ray casting and the
+// exact geometry the metrics need (shared/spec/simulation.md). Only the simulator knows the world; planners
+// see scans.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "occtrack/core/scan.hpp"
+#include "occtrack/core/scenario.hpp"
+
+namespace occtrack::sim {
+
+using core::Vec2;
+
+/// One obstacle's shape at one instant.
+struct Shape {
+  core::ObstacleSpec::Shape kind = core::ObstacleSpec::Shape::circle;
+  Vec2 center = Vec2::Zero();
+  double radius = 0.0;       ///< circle
+  Vec2 half_size = Vec2::Zero();  ///< box: half extents along its own axes
+  double yaw = 0.0;          ///< box
+  Vec2 velocity = Vec2::Zero();   ///< current velocity of the shape (zero for static ones)
+};
+
+/// Signed distance from point p to the shape's boundary: negative inside.
+double signed_distance(const Shape& shape, const Vec2& p);
+/// Smallest t in [0, max_range] with origin + t * direction on the shape (direction of unit length);
+/// returns +infinity when the ray misses within max_range. An origin inside the shape returns 0.
+double ray_distance(const Shape& shape, const Vec2& origin, const Vec2& direction, double max_range);
+/// Whether the closed segment a-b touches the shape (interior or boundary).
+bool segment_intersects(const Shape& shape, const Vec2& a, const Vec2& b);
+
+class World {
+ public:
+  /// The scenario must be valid (io::read_scenario validates); throws std::invalid_argument otherwise.
+  explicit World(const core::Scenario& scenario);
+
+  const core::Scenario& scenario() const { return scenario_; }
+
+  /// Every obstacle's shape at time t (moving ones along their paths, back and forth).
+  const std::vector<Shape>& shapes_at(double t);
+
+  /// Target position and velocity at time t (linear between waypoints, held after the last; velocity is the
+  /// slope of the current segment, zero after the last waypoint).
+  Vec2 target_position(double t) const;
+  Vec2 target_velocity(double t) const;
+
+  /// LiDAR scan from `position` at time t: scenario().sensor.beams beams evenly over 360 degrees starting at
+  /// angle 0, first hit against every shape, +infinity where nothing is hit within range; Gaussian range
+  /// noise of the sensor's standard deviation from `rng` when noise > 0.
+  core::Scan scan(const Vec2& position, double t, std::mt19937_64& rng);
+  /// The same into `out`, reusing its storage (no allocation once `out.ranges` has the beam count).
+  void scan(const Vec2& position, double t, std::mt19937_64& rng, core::Scan& out);
+
+  /// Whether the segment between two points touches any obstacle at time t (line of sight is blocked).
+  bool segment_blocked(const Vec2& a, const Vec2& b, double t);
+
+  /// Smallest signed distance from point p to any obstacle at time t (negative: inside one);
+  /// +infinity without obstacles.
+  double clearance(const Vec2& p, double t);
+
+ private:
+  core::Scenario scenario_;
+  std::vector<Shape> shapes_;  // cache for shapes_at
+  double shapes_time_ = -1.0;
+  std::vector<double> path_lengths_;  // per obstacle, total polyline length (0 if static)
+  std::vector<std::vector<double>> path_arc_;  // per obstacle, arc length at each path point (empty if static)
+  std::vector<std::size_t> moving_;            // indices of the obstacles that move
+  std::vector<double> bounding_radius_;        // per obstacle, radius of a circle about its centre holding it
+  std::vector<Vec2> box_axis_;                 // per obstacle, (cos yaw, sin yaw) (boxes; (1, 0) for circles)
+  std::vector<Vec2> beam_directions_;          // unit direction of every LiDAR beam
+  bool shapes_valid_ = false;                  // whether shapes_ holds shapes_time_
+};
+
+}  // namespace occtrack::sim

@@ -1,0 +1,67 @@
+#include "occtrack/planners/ranking.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "occtrack/occlusion/line_of_sight.hpp"
+
+namespace occtrack::planners {
+
+Ranking::Ranking(const RankingSettings& settings, const projection::Settings& projection)
+    : settings_(settings),
+      projection_(projection),
+      basis_(core::bernstein_basis(projection.degree, projection.steps, projection.horizon)) {
+  occlusion_weights_.resize(projection.steps);
+  for (int k = 0; k < projection.steps; ++k) {
+    const double s = basis_.times(k) / projection.horizon;
+    occlusion_weights_(k) = 1.0 - (1.0 - settings.late_occlusion_weight) * s;
+  }
+}
+
+RankingTerms Ranking::evaluate(const Eigen::RowVectorXd& xi_row, const Eigen::Vector4d& target, const PointRows& collision_points,
+                               const PointRows& occlusion_points) const {
+  const int n = projection_.coefficients(), m = projection_.steps;
+  const Eigen::VectorXd cx = xi_row.head(n).transpose();
+  const Eigen::VectorXd cy = xi_row.tail(n).transpose();
+  Eigen::MatrixX2d positions(m, 2), targets(m, 2);
+  positions.col(0) = basis_.P * cx;
+  positions.col(1) = basis_.P * cy;
+  const Eigen::VectorXd vx = basis_.Pd * cx, vy = basis_.Pd * cy;
+  const Eigen::VectorXd ax = basis_.Pdd * cx, ay = basis_.Pdd * cy;
+  targets.col(0) = target(0) + target(2) * basis_.times.array();
+  targets.col(1) = target(1) + target(3) * basis_.times.array();
+
+  RankingTerms terms;
+  terms.occlusion = occlusion::occlusion_cost(positions, targets, basis_.times, occlusion_points, occlusion_weights_,
+                                              settings_.occlusion_stride, settings_.occlusion_margin);
+  double tracking = 0, smoothness = 0, violation = 0;
+  const double a = projection_.obstacle_radius;
+  const Eigen::Index N = collision_points.rows();
+  for (int k = 0; k < m; ++k) {
+    const double t = basis_.times(k);
+    const double distance = (positions.row(k) - targets.row(k)).norm();
+    tracking += (distance - settings_.band.reference) * (distance - settings_.band.reference);
+    smoothness += ax(k) * ax(k) + ay(k) * ay(k);
+    // Deepest penetration of an obstacle disk at this step: one square root per step, not per point.
+    double nearest2 = INFINITY;
+    for (Eigen::Index j = 0; j < N; ++j) {
+      const double dx = positions(k, 0) - (collision_points(j, 0) + collision_points(j, 2) * t);
+      const double dy = positions(k, 1) - (collision_points(j, 1) + collision_points(j, 3) * t);
+      nearest2 = std::min(nearest2, dx * dx + dy * dy);
+    }
+    const double penetration = N > 0 ? a - std::sqrt(nearest2) : 0.0;
+    const double speed2 = vx(k) * vx(k) + vy(k) * vy(k), accel2 = ax(k) * ax(k) + ay(k) * ay(k);
+    const double vmax = projection_.speed_max, amax = projection_.accel_max;
+    violation += std::max(0.0, penetration) + (speed2 > vmax * vmax ? std::sqrt(speed2) - vmax : 0.0) +
+                 (accel2 > amax * amax ? std::sqrt(accel2) - amax : 0.0);
+  }
+  terms.tracking = tracking / m;
+  terms.smoothness = smoothness / m;
+  terms.violation = violation / m;
+  terms.total = settings_.occlusion_weight * terms.occlusion + settings_.tracking_weight * terms.tracking +
+                settings_.smoothness_weight * terms.smoothness + settings_.violation_weight * terms.violation;
+  if (!std::isfinite(terms.total)) terms.total = INFINITY;
+  return terms;
+}
+
+}  // namespace occtrack::planners
