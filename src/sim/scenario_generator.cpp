@@ -22,6 +22,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <cstdio>
 
 #include "occtrack/sim/world.hpp"
 
@@ -406,6 +407,7 @@ class EpisodeMaker {
         if (k >= failed_at) failures_in_a_row = 0;  // past the dead end
         continue;
       }
+      fprintf(stderr, "DEADEND\n");
       // Dead end: back up a few steps (further after repeated failures there) and draw again from there.
       if (++backtracks > t_.max_backtracks)
         throw std::runtime_error("generate_episode: gave up after " + std::to_string(t_.max_backtracks) +
@@ -547,6 +549,21 @@ class EpisodeMaker {
     return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : o.heading;
   }
 
+  // The speed at which the turns of the route over the next few metres stay within the lateral acceleration:
+  // turning by an angle over a distance s at speed v takes a turn rate of about angle v / s <= a_lat / v.
+  double corner_speed(const Operator& o) const {
+    const std::vector<Vec2>& route = *o.route;
+    double limit = kInfinity, along = 0.0;
+    for (std::size_t j = o.route_index; j + 1 < route.size() && along < 4.0; ++j) {
+      along += (route[j + 1] - route[j]).norm();
+      if (along < 0.5) continue;
+      const Vec2 to = route[j + 1] - o.position;
+      const double turn = std::abs(wrap_angle(std::atan2(to.y(), to.x()) - o.heading));
+      if (turn > 1e-3) limit = std::min(limit, std::sqrt(0.6 * t_.lateral_acceleration * along / turn));
+    }
+    return limit;
+  }
+
   Operator start() {
     const double dt = t_.waypoint_period;
     for (int attempt = 0; attempt < 100000; ++attempt) {
@@ -579,6 +596,7 @@ class EpisodeMaker {
   }
 
   void begin_stop(Operator& o, double t_next) {
+    fprintf(stderr, "STOP\n");
     o.speed = 0.0;
     o.braking = false;
     const double stop = rng_.uniform(t_.stop_min, t_.stop_max);
@@ -612,15 +630,17 @@ class EpisodeMaker {
       if (!set_route(o, o.route->back(), t) && !new_goal(o, t)) return false;
     }
     o.wander = std::clamp(0.8 * o.wander + 0.12 * rng_.normal(), -0.5, 0.5);
-    const double wanted_heading = route_heading(o, 0.8 + 1.2 * o.speed) + o.wander;
+    // The heading error wanders less at speed (an operator concentrates when going fast).
+    const double wanted_heading = route_heading(o, 0.8 + 1.2 * o.speed) + o.wander / std::max(1.0, o.speed);
     double wanted_speed = o.braking ? 0.0 : o.cruise_speed;
     if (std::abs(wrap_angle(wanted_heading - o.heading)) > 0.9)  // slow down for a sharp turn
       wanted_speed = std::min(wanted_speed, std::max(t_.min_speed, 0.5 * o.cruise_speed));
+    wanted_speed = std::min(wanted_speed, std::max(t_.min_speed, corner_speed(o)));
 
     const double dv = t_.acceleration * dt;
     const double speed_cap = t_.max_speed * (1.0 - 1e-4);  // rounding must not push a segment over the max
     const double speed = std::min(speed_cap, o.speed + std::clamp(wanted_speed - o.speed, -dv, dv));
-    const double braking_speed = std::max(0.0, o.speed - dv);
+    const double braking_speed = std::max(0.0, o.speed - t_.braking_deceleration * dt);
 
     // Arrived at a stop.
     if (o.braking && speed <= 0.0) {
@@ -634,7 +654,7 @@ class EpisodeMaker {
       double heading, cost;
     };
     std::vector<Candidate> candidates;
-    if (o.speed <= 0.0) {
+    if (o.speed <= 0.0) { fprintf(stderr, "STILL\n");
       for (int i = 0; i < 24; ++i) candidates.push_back({o.heading + i * kPi / 12.0, 0.0});
       candidates.push_back({wanted_heading, 0.0});
     } else {
@@ -658,7 +678,7 @@ class EpisodeMaker {
         const Vec2 u = direction(c.heading);
         const Vec2 next = round_to(o.position + v * dt * u, t_.decimals);
         if (!static_clear(o.position, next)) continue;
-        const double braking_distance = v * v / (2.0 * t_.acceleration) + 0.3;
+        const double braking_distance = v * v / (2.0 * t_.braking_deceleration) + 0.3;
         if (!static_clear(next, next + braking_distance * u, 0.01)) continue;
         if (!moving_clear(o.position, next, t, t_next)) continue;
         if (moving_clear(next, next + 2.0 * v * u, t_next, t_next + 2.0, 0.2)) {
@@ -672,8 +692,9 @@ class EpisodeMaker {
     Candidate chosen{};
     double v = speed;
     bool found = choose(v, chosen);
+    if (!found) fprintf(stderr, "SLOWER v=%.2f want_v=%.2f err=%.2f cruise=%.2f braking=%d\n", speed, wanted_speed, wrap_angle(wanted_heading - o.heading), o.cruise_speed, (int)o.braking);
     if (!found && braking_speed < speed) found = choose(v = braking_speed, chosen);
-    if (!found) {
+    if (!found) { fprintf(stderr, "FALLBACK v=%.2f\n", o.speed);
       // Brake straight on: clear of static obstacles by the braking line checked last step.
       v = braking_speed;
       const Vec2 next = round_to(o.position + v * dt * direction(o.heading), t_.decimals);
@@ -774,6 +795,8 @@ bool TargetSettings::validate(std::string* error) const {
   c.positive(min_speed, "min_speed");
   c.range(min_speed, max_speed, "min_speed", "max_speed");
   c.positive(acceleration, "acceleration");
+  c.positive(braking_deceleration, "braking_deceleration");
+  c.range(acceleration, braking_deceleration, "acceleration", "braking_deceleration");
   c.positive(lateral_acceleration, "lateral_acceleration");
   c.positive(turn_rate_max, "turn_rate_max");
   c.positive(speed_change_min, "speed_change_min");

@@ -250,8 +250,8 @@ const std::vector<Shape>& World::shapes_at(double t) {
 
 Vec2 World::target_position(double t) const {
   const std::vector<core::TargetWaypoint>& path = scenario_.target;
-  if (t <= path.front().time) return path.front().position;
-  if (t >= path.back().time) return path.back().position;
+  if (!(t > path.front().time)) return path.front().position;  // also for a NaN time
+  if (!(t < path.back().time)) return path.back().position;
   const auto next = std::upper_bound(path.begin(), path.end(), t,
                                      [](double time, const core::TargetWaypoint& w) { return time < w.time; });
   const core::TargetWaypoint& a = *(next - 1);
@@ -262,7 +262,7 @@ Vec2 World::target_position(double t) const {
 
 Vec2 World::target_velocity(double t) const {
   const std::vector<core::TargetWaypoint>& path = scenario_.target;
-  if (t < path.front().time || t >= path.back().time) return Vec2::Zero();
+  if (!(t >= path.front().time && t < path.back().time)) return Vec2::Zero();
   const auto next = std::upper_bound(path.begin(), path.end(), t,
                                      [](double time, const core::TargetWaypoint& w) { return time < w.time; });
   const core::TargetWaypoint& a = *(next - 1);

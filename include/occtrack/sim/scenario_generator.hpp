@@ -86,8 +86,9 @@ struct TargetSettings {
   double waypoint_period = 0.5;   ///< s between waypoints (the path is linear between them)
   double max_speed = 1.0;         ///< m/s, never exceeded on any segment
   double min_speed = 0.25;        ///< m/s; cruising speeds are drawn uniformly in [min_speed, max_speed]
-  double acceleration = 1.0;      ///< m/s^2, bound on speed changes between segments
-  double lateral_acceleration = 1.5;  ///< m/s^2, bounds turning while moving (turn rate <= a_lat / v)
+  double acceleration = 1.0;      ///< m/s^2, bound on speed changes between segments, braking aside
+  double braking_deceleration = 2.0;  ///< m/s^2, the hardest braking (when the way ahead closes)
+  double lateral_acceleration = 2.0;  ///< m/s^2, bounds turning while moving (turn rate <= a_lat / v)
   double turn_rate_max = 1.5;     ///< rad/s, bound on turning at low speed (any turn while stopped)
   double speed_change_min = 3.0;  ///< s between changes of the cruising speed, drawn in [min, max]
   double speed_change_max = 10.0;
