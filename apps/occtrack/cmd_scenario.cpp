@@ -131,10 +131,11 @@ int run_single(const Options& o) {
     std::cerr << "occtrack scenario generate: --kind: expected forest, boxes or mixed, got '" << o.kind << "'\n";
     return kExitInputError;
   }
-  // The suites' worlds of the same kind, unless told otherwise.
+  // Worlds like the static suites' world of the same kind, unless told otherwise.
   sim::GeneratorSettings settings;
-  settings.style.kind = *kind;
-  settings.static_obstacles = *kind == sim::WorldKind::forest ? 90 : *kind == sim::WorldKind::boxes ? 55 : 70;
+  const sim::SuiteSpec static_suite = *sim::find_suite("static-1ms");
+  for (const sim::SuiteWorld& w : static_suite.worlds)
+    if (w.settings.style.kind == *kind) settings = w.settings;
   if (o.obstacles) settings.static_obstacles = *o.obstacles;
   settings.moving_obstacles = o.moving_obstacles;
   sim::TargetSettings target;

@@ -2,6 +2,7 @@
 // the spec's layout. Every failure is an InputError "SOURCE: key.path: rule (line N)".
 #include "occtrack/io/scenario.hpp"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -332,6 +333,21 @@ core::Scenario read_document(const YamlReader& r, const YAML::Node& root) {
   return scenario;
 }
 
+// Records where a YAML document starts; ignores its content.
+class DocumentStart : public YAML::EventHandler {
+ public:
+  YAML::Mark mark = YAML::Mark::null_mark();
+  void OnDocumentStart(const YAML::Mark& at) override { mark = at; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
 // --- Writing.
 
 std::string point_text(const Vec2& p) { return "[" + format_number(p.x()) + ", " + format_number(p.y()) + "]"; }
@@ -365,20 +381,32 @@ std::string name_text(const std::string& name) {
 
 core::Scenario parse_scenario(const std::string& yaml_text, const std::string& source) {
   const YamlReader reader(source);
-  std::vector<YAML::Node> documents;
+  const auto where = [](const YAML::Mark& mark) {
+    return mark.is_null() ? std::string("(top level)")
+                          : "line " + std::to_string(mark.line + 1) + ", column " + std::to_string(mark.column + 1);
+  };
+  YAML::Node root;
   try {
-    documents = YAML::LoadAll(yaml_text);
+    // Count the documents first, at most two parser calls: yaml-cpp 0.7's LoadAll never returns on some bad
+    // input (a stray ',' outside any collection yields an empty document forever), and Load would quietly
+    // read such input as null or drop every document after the first.
+    std::istringstream stream(yaml_text);
+    YAML::Parser parser(stream);
+    DocumentStart first, second;
+    if (!parser.HandleNextDocument(first))
+      throw InputError(source + ": (top level): empty file, expected a scenario map");
+    if (parser.HandleNextDocument(second)) {
+      if (second.mark.pos == first.mark.pos)  // the parser made no progress
+        throw InputError(source + ": " + where(second.mark) +
+                         ": not valid YAML (unexpected character outside any list or map)");
+      throw InputError(source + ": " + where(second.mark) + ": expected one YAML document, found a second one");
+    }
+    root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
-    std::string where = "(top level)";
-    if (!e.mark.is_null())
-      where = "line " + std::to_string(e.mark.line + 1) + ", column " + std::to_string(e.mark.column + 1);
-    throw InputError(source + ": " + where + ": not valid YAML (" + e.msg + ")");
+    throw InputError(source + ": " + where(e.mark) + ": not valid YAML (" + e.msg + ")");
   }
-  if (documents.empty()) throw InputError(source + ": (top level): empty file, expected a scenario map");
-  if (documents.size() > 1)
-    throw InputError(source + ": (top level): expected one YAML document, got " + std::to_string(documents.size()));
   try {
-    return read_document(reader, documents.front());
+    return read_document(reader, root);
   } catch (const YAML::Exception& e) {
     // Not expected (the reader checks every node before use); kept so that no yaml-cpp exception escapes.
     const std::string line = e.mark.is_null() ? "" : " (line " + std::to_string(e.mark.line + 1) + ")";

@@ -13,7 +13,7 @@ namespace occtrack::planners {
 
 ProjCemSettings ProjCemSettings::offline_expert(int threads) {
   ProjCemSettings s;
-  s.samples = 2500;
+  s.samples = 2000;
   s.cem_iterations = 4;
   s.projection.iterations = 50;
   s.projection.threads = std::max(1, threads);

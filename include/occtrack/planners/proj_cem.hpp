@@ -35,7 +35,7 @@ struct ProjCemSettings {
   }();
   RankingSettings ranking;
 
-  /// The offline expert: 2500 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.
+  /// The offline expert: 2000 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.
   static ProjCemSettings offline_expert(int threads);
 };
 

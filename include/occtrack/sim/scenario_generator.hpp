@@ -5,7 +5,8 @@
 // Everything is a pure function of the settings and a seed: one std::mt19937_64 per call, and the uniform and
 // normal draws are made from its raw bits here (never std::*_distribution, whose output differs between
 // standard libraries). Numbers are rounded to `decimals` places before they are checked, so that what is
-// written to a file is exactly what was checked.
+// written to a file is exactly what was checked. (The committed suite files are the reference: a compiler
+// that rounds floating point differently, e.g. by fusing multiply-adds, may draw different files.)
 //
 // Seeds. The benchmark suites (benchmark_suites() below, scenarios/README.md) use world and episode seeds
 // in [kBenchmarkSeedMin, kBenchmarkSeedMax] = [1000, 1999]. Training data must be generated from seeds outside
@@ -126,7 +127,8 @@ core::Scenario generate_world(const GeneratorSettings& settings, std::uint64_t w
 
 /// One episode in `world` (the result of generate_world, whose area must match the target settings' area;
 /// its obstacles are copied): the target's timed path, the robot's start `robot_distance` behind the target's
-/// start (opposite its first heading) in free space with line of sight, the sensor. Throws
+/// start (opposite the way the target first moves, turned by up to 0.6 rad where that spot is taken) in free
+/// space with line of sight, the sensor. Throws
 /// std::invalid_argument for invalid settings and std::runtime_error when no path could be made (a world too
 /// dense for the clearances).
 core::Scenario generate_episode(const core::Scenario& world, const TargetSettings& target, std::uint64_t seed,
@@ -161,8 +163,8 @@ struct SuiteSpec {
   }
 };
 
-/// static-1ms, static-2ms, dynamic-1.5ms and their -smoke versions (one 20 s episode per world), with the
-/// seeds documented in scenarios/README.md.
+/// static-1ms, static-2ms, dynamic-1.5ms and their -smoke versions (the same worlds, one 20 s episode per
+/// world), with the seeds documented in scenarios/README.md.
 std::vector<SuiteSpec> benchmark_suites();
 std::optional<SuiteSpec> find_suite(std::string_view name);
 
