@@ -11,6 +11,12 @@ void add_bench_command(CLI::App& app, int& exit_code);
 void add_bench_suite_command(CLI::App& bench, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
 void add_scenario_command(CLI::App& app, int& exit_code);
+void add_dataset_command(CLI::App& app, int& exit_code);       // cmd_dataset.cpp
+void add_bench_policy_command(CLI::App& bench, int& exit_code);  // cmd_bench_policy.cpp
+#ifdef OCCTRACK_HAVE_LEARNING
+void add_train_command(CLI::App& app, int& exit_code);          // learning/cmd_train.cpp
+void add_bench_train_command(CLI::App& bench, int& exit_code);  // learning/cmd_bench_train.cpp
+#endif
 
 // Exit codes shared by the subcommands.
 inline constexpr int kExitOk = 0;

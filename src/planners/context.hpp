@@ -21,6 +21,7 @@ struct Frame {
   Eigen::Vector4d target = Eigen::Vector4d::Zero();  ///< x, y, vx, vy
   PointRows nearest;    ///< the optimizer's obstacles, N x 4 (padded as perception pads)
   PointRows occluders;  ///< every distinct point that can block the view, x 4
+  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> cloud;  ///< perception's fixed cloud (PointNet input)
   Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< the robot's world position
   double time = 0.0;
 };

@@ -50,6 +50,8 @@ struct PlannerOptions {
   int threads = 1;          ///< Proj-CEM: projection threads
   int samples = 0;          ///< Proj-CEM: samples per CEM iteration (0: the planner's default)
   bool offline_expert = false;  ///< Proj-CEM: the offline expert budget (thousands of samples)
+  std::string model;        ///< learned planners: model file (empty: the shipped model of the variant)
+  int batch = 30;           ///< learned planners: samples drawn per cycle (30; 5 for constrained hardware)
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".
