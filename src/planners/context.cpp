@@ -35,6 +35,7 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
   frame.target << input.target_position - input.robot_position, input.target_velocity;
   frame.nearest = observation_.nearest;
   frame.cloud = observation_.cloud;
+  frame.scan = input.scan;
   // Occluders: the nearest points (with velocity estimates), then the rest of the distinct cloud points.
   const int distinct = std::min<int>(observation_.voxels, static_cast<int>(observation_.cloud.rows()));
   const int near = std::min<int>(distinct, static_cast<int>(observation_.nearest.rows()));

@@ -22,6 +22,7 @@ struct Frame {
   PointRows nearest;    ///< the optimizer's obstacles, N x 4 (padded as perception pads)
   PointRows occluders;  ///< every distinct point that can block the view, x 4
   Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> cloud;  ///< perception's fixed cloud (PointNet input)
+  const core::Scan* scan = nullptr;  ///< the cycle's scan (valid during the cycle only), for the shadow term
   Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< the robot's world position
   double time = 0.0;
 };

@@ -116,7 +116,8 @@ PlannerOutput ProjCem::plan(const PlannerInput& input) {
     }
     for (int b = 0; b < B; ++b) {
       costs[b] = s.context.ranking()
-                     .evaluate(s.result.xi.row(b).cast<double>(), s.frame.target, s.frame.nearest, s.frame.occluders)
+                     .evaluate(s.result.xi.row(b).cast<double>(), s.frame.target, s.frame.nearest, s.frame.occluders,
+                               s.frame.scan)
                      .total;
     }
     std::iota(order.begin(), order.end(), 0);

@@ -18,8 +18,37 @@ Ranking::Ranking(const RankingSettings& settings, const projection::Settings& pr
   }
 }
 
+namespace {
+
+/// Mean depth (capped) behind the scan's returns of the positions in rows [0, last], every `stride` rows.
+/// A position is behind a return when it is farther from the origin than the nearest return among the beam
+/// at its bearing and that beam's two neighbours (so that a plan cannot slip between two beams).
+double shadow_depth(const Eigen::MatrixX2d& positions, int last, int stride, const core::Scan& scan, double cap) {
+  const int beams = static_cast<int>(scan.ranges.size());
+  if (beams == 0 || !(scan.angle_increment > 0.0) || last < 0) return 0.0;
+  auto range_of = [&](int i) {
+    i %= beams;
+    if (i < 0) i += beams;
+    const double r = scan.ranges[static_cast<std::size_t>(i)];
+    return std::isfinite(r) && r > 0.0 && r <= scan.range_max ? r : INFINITY;
+  };
+  double total = 0.0;
+  int checked = 0;
+  for (int k = 0; k <= last; k += stride, ++checked) {
+    const double x = positions(k, 0), y = positions(k, 1);
+    const double distance = std::hypot(x, y);
+    if (!std::isfinite(distance)) return cap;
+    const int beam = static_cast<int>(std::lround((std::atan2(y, x) - scan.angle_min) / scan.angle_increment));
+    const double wall = std::min({range_of(beam - 1), range_of(beam), range_of(beam + 1)});
+    if (distance > wall) total += std::min(distance - wall, cap);
+  }
+  return checked ? total / checked : 0.0;
+}
+
+}  // namespace
+
 RankingTerms Ranking::evaluate(const Eigen::RowVectorXd& xi_row, const Eigen::Vector4d& target, const PointRows& collision_points,
-                               const PointRows& occlusion_points) const {
+                               const PointRows& occlusion_points, const core::Scan* scan) const {
   const int n = projection_.coefficients(), m = projection_.steps;
   const Eigen::VectorXd cx = xi_row.head(n).transpose();
   const Eigen::VectorXd cy = xi_row.tail(n).transpose();
@@ -50,6 +79,8 @@ RankingTerms Ranking::evaluate(const Eigen::RowVectorXd& xi_row, const Eigen::Ve
       nearest2 = std::min(nearest2, dx * dx + dy * dy);
     }
     const double penetration = N > 0 ? a - std::sqrt(nearest2) : 0.0;
+    if (N > 0 && t <= settings_.near_horizon)
+      terms.near = std::max(terms.near, settings_.near_clearance - std::sqrt(nearest2));
     const double speed2 = vx(k) * vx(k) + vy(k) * vy(k), accel2 = ax(k) * ax(k) + ay(k) * ay(k);
     const double vmax = projection_.speed_max, amax = projection_.accel_max;
     violation += std::max(0.0, penetration) + (speed2 > vmax * vmax ? std::sqrt(speed2) - vmax : 0.0) +
@@ -58,8 +89,14 @@ RankingTerms Ranking::evaluate(const Eigen::RowVectorXd& xi_row, const Eigen::Ve
   terms.tracking = tracking / m;
   terms.smoothness = smoothness / m;
   terms.violation = violation / m;
+  if (scan && settings_.shadow_weight > 0.0) {
+    int last = 0;
+    while (last + 1 < m && basis_.times(last + 1) <= settings_.shadow_horizon) ++last;
+    terms.shadow = shadow_depth(positions, last, 2, *scan, settings_.shadow_depth_cap);
+  }
   terms.total = settings_.occlusion_weight * terms.occlusion + settings_.tracking_weight * terms.tracking +
-                settings_.smoothness_weight * terms.smoothness + settings_.violation_weight * terms.violation;
+                settings_.smoothness_weight * terms.smoothness + settings_.violation_weight * terms.violation +
+                settings_.shadow_weight * terms.shadow + settings_.near_weight * terms.near;
   if (!std::isfinite(terms.total)) terms.total = INFINITY;
   return terms;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "occtrack/core/bernstein.hpp"
+#include "occtrack/core/scan.hpp"
 #include "occtrack/core/tracking.hpp"
 #include "occtrack/projection/settings.hpp"
 
@@ -20,13 +21,26 @@ struct RankingSettings {
   double occlusion_margin = 0.35;   ///< metres: a point this close to the line of sight blocks it
   int occlusion_stride = 4;         ///< check the line of sight every this many steps
   double late_occlusion_weight = 0.3;  ///< occlusion weight at the horizon's end, relative to its start
+  /// Per metre (mean over the checked steps) of plan behind a surface the LiDAR sees. The optimizer's
+  /// obstacles are disks around the visible points, so a plan that has crossed a wall of points is pushed
+  /// further through it, not back: from the scan, such a plan is in the shadow of a return, where the
+  /// obstacle's inside is. 0 switches the term off.
+  double shadow_weight = 200.0;
+  double shadow_horizon = 2.5;     ///< seconds of the plan checked against the scan (nearer is what matters)
+  double shadow_depth_cap = 1.0;   ///< metres: depth behind a return beyond which the penalty stops growing
+  /// Per metre of the deepest intrusion, in the plan's first near_horizon seconds, closer than near_clearance
+  /// to an obstacle point. The violation term above is a mean over the whole horizon, so a plan that
+  /// grazes a wall for a few steps right ahead costs little there; this is where the robot will be next.
+  double near_weight = 2000.0;
+  double near_horizon = 1.5;      ///< seconds
+  double near_clearance = 0.3;    ///< metres from an obstacle point to the robot centre (robot radius + 5 cm)
   core::TrackingBand band;
 
   bool operator==(const RankingSettings&) const = default;
 };
 
 struct RankingTerms {
-  double occlusion = 0, tracking = 0, smoothness = 0, violation = 0, total = 0;
+  double occlusion = 0, tracking = 0, smoothness = 0, violation = 0, shadow = 0, near = 0, total = 0;
 };
 
 using PointRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
@@ -37,9 +51,10 @@ class Ranking {
 
   /// Costs of trajectories given as coefficient rows (x coefficients, then y), robot-centric. target:
   /// (x, y, vx, vy) robot-centric, predicted linearly. collision_points: the optimizer's obstacles (N x 4).
-  /// occlusion_points: every point that can block the view (x, y, vx, vy).
+  /// occlusion_points: every point that can block the view (x, y, vx, vy). scan: the cycle's scan, taken
+  /// at the robot-centric origin, for the shadow term (null: no shadow term).
   RankingTerms evaluate(const Eigen::RowVectorXd& xi, const Eigen::Vector4d& target, const PointRows& collision_points,
-                        const PointRows& occlusion_points) const;
+                        const PointRows& occlusion_points, const core::Scan* scan = nullptr) const;
 
   const core::BernsteinBasis& basis() const { return basis_; }
 
