@@ -33,7 +33,7 @@ struct RankingSettings {
   /// grazes a wall for a few steps right ahead costs little there; this is where the robot will be next.
   double near_weight = 2000.0;
   double near_horizon = 1.5;      ///< seconds
-  double near_clearance = 0.3;    ///< metres from an obstacle point to the robot centre (robot radius + 5 cm)
+  double near_clearance = 0.4;    ///< metres from an obstacle point to the robot centre: the optimizer's disk radius
   core::TrackingBand band;
 
   bool operator==(const RankingSettings&) const = default;
