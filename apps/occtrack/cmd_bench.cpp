@@ -125,6 +125,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   CLI::App* bench = app.add_subcommand("bench", "Measure the speed of occtrack's components");
   bench->require_subcommand(1);
   add_bench_suite_command(*bench, exit_code);
+#ifdef OCCTRACK_HAVE_LEARNING
+  add_bench_train_command(*bench, exit_code);
+#endif
+  add_bench_policy_command(*bench, exit_code);
   auto o = std::make_shared<Options>();
   CLI::App* cmd = bench->add_subcommand("projection", "Time the batched projection on random plausible problems");
   cmd->add_option("--batch", o->batch, "Samples per solve (B)")->check(CLI::Range(1, 1000000))->capture_default_str();

@@ -28,6 +28,11 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_option("--threads", o.planner_options.threads, "Threads a planner may use (Proj-CEM's projection)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
+  cmd->add_option("--model", o.planner_options.model,
+                  "Learned planners (cvae, bc, cvae-fixed-q): model file (default: the shipped model of the variant)");
+  cmd->add_option("--batch", o.planner_options.batch, "Learned planners: latent samples per cycle (5 on small hardware)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
 }
 

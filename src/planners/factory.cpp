@@ -1,12 +1,15 @@
 #include <stdexcept>
 
 #include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/planners/proj_cem.hpp"
 
 namespace occtrack::planners {
 
-std::vector<std::string> planner_names() { return {"projcem", "projcem-expert", "follower"}; }
+std::vector<std::string> planner_names() {
+  return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q"};
+}
 
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options) {
   if (name == "projcem" || name == "projcem-expert") {
@@ -19,6 +22,15 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") return std::make_unique<Follower>();
+  for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q}) {
+    if (name != learned_planner_name(variant)) continue;
+    LearnedPolicySettings s;
+    s.variant = variant;
+    s.model_path = options.model;  // empty: the shipped model of the variant
+    s.batch = options.batch;
+    s.seed = options.seed;
+    return std::make_unique<LearnedPolicy>(s);
+  }
   std::string known;
   for (const auto& n : planner_names()) known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown planner \"" + name + "\" (known: " + known + ")");

@@ -1,0 +1,247 @@
+// occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
+//                       [--repeats R] [--scenario FILE] [--seed S] [--json FILE]
+//
+// Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
+// projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
+// (default scenarios/static-1ms/forest-a-1.yaml) and the scans it sees are replayed. Prints the median, p99
+// and mean in milliseconds and the median split per stage. --random times a model with random weights, so
+// that the cost can be measured before a model is trained.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <time.h>
+#include <vector>
+
+#include "commands.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/learned.hpp"
+#include "occtrack/policy/model.hpp"
+#include "occtrack/sim/world.hpp"
+
+namespace fs = std::filesystem;
+
+namespace occtrack::app {
+
+namespace {
+
+constexpr const char* kDefaultScenario = "scenarios/static-1ms/forest-a-1.yaml";
+
+struct Options {
+  std::string model, variant = "cvae", scenario, json_path;
+  bool random = false;
+  int batch = 30;
+  int iterations = 50;
+  int repeats = 1000;
+  double seconds = 5.0;
+  std::uint64_t seed = 1;
+};
+
+struct Summary {
+  double median = 0, p99 = 0, mean = 0, min = 0;
+};
+
+Summary summarize(std::vector<double> ms) {
+  Summary s;
+  if (ms.empty()) return s;
+  std::sort(ms.begin(), ms.end());
+  const std::size_t n = ms.size();
+  s.median = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+  s.p99 = ms[std::min(n - 1, static_cast<std::size_t>(0.99 * n))];
+  s.min = ms.front();
+  double sum = 0;
+  for (double x : ms) sum += x;
+  s.mean = sum / n;
+  return s;
+}
+
+// The given scenario, else the default one from the working directory or from the source tree (the shipped
+// models' folder sits beside scenarios/).
+std::string resolve_scenario(const std::string& given) {
+  if (!given.empty()) return given;
+  if (fs::is_regular_file(kDefaultScenario)) return kDefaultScenario;
+  const fs::path source_tree = fs::path(planners::default_model_path(policy::Variant::cvae)).parent_path().parent_path();
+  const fs::path beside = source_tree / kDefaultScenario;
+  if (fs::is_regular_file(beside)) return beside.string();
+  throw std::runtime_error(std::string(kDefaultScenario) + ": not found (pass --scenario FILE)");
+}
+
+// Planner inputs along a follower's drive through the scenario, one per planning period.
+// CPU time of the calling thread: unlike wall time, it does not count the time slices other processes take on
+// a shared machine.
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+struct Recording {
+  std::vector<core::Scan> scans;
+  std::vector<planners::PlannerInput> inputs;
+};
+
+Recording record(const core::Scenario& scenario, double seconds) {
+  const double period = 0.05;
+  const int frames = std::max(1, static_cast<int>(std::min(seconds, scenario.duration) / period));
+  sim::World world(scenario);
+  std::mt19937_64 rng(1);
+  planners::Follower follower;
+  follower.reset();
+  Recording r;
+  r.scans.resize(frames);
+  r.inputs.resize(frames);
+  Eigen::Vector2d position = scenario.robot_position, velocity = scenario.robot_velocity;
+  for (int k = 0; k < frames; ++k) {
+    const double t = k * period;
+    world.scan(position, t, rng, r.scans[k]);
+    r.scans[k].time = t;
+    planners::PlannerInput& in = r.inputs[k];
+    in.time = t;
+    in.robot_position = position;
+    in.robot_velocity = velocity;
+    in.target_position = world.target_position(t);
+    in.target_velocity = world.target_velocity(t);
+    in.scan = &r.scans[k];
+    velocity = follower.plan(in).command_velocity;
+    position += velocity * period;
+  }
+  return r;
+}
+
+int run(const Options& o) {
+  planners::LearnedPolicySettings settings;
+  settings.variant = policy::parse_variant(o.variant);
+  settings.batch = o.batch;
+  settings.seed = o.seed;
+  settings.projection.iterations = o.iterations;
+  const std::string scenario_path = resolve_scenario(o.scenario);
+  const core::Scenario scenario = io::read_scenario(scenario_path);
+
+  std::string model_name;
+  std::unique_ptr<planners::LearnedPolicy> planner;
+  if (o.random) {
+    projection::Settings p = settings.projection;
+    p.obstacles = settings.perception.nearest_count;
+    policy::NetworkConfig network = policy::NetworkConfig::for_projection(p);
+    network.cloud_points = settings.perception.cloud_size;
+    policy::Model model(policy::random_model(network, p, o.variant, o.seed));
+    planner = std::make_unique<planners::LearnedPolicy>(settings, std::move(model));
+    model_name = "random";
+  } else {
+    settings.model_path = o.model;
+    planner = std::make_unique<planners::LearnedPolicy>(settings);
+    model_name = planner->model().source();
+  }
+
+  const Recording rec = record(scenario, o.seconds);
+  const int frames = static_cast<int>(rec.inputs.size());
+  // Warm-up: one pass, so that every buffer has its size; then the timed cycles, replaying the drive.
+  planner->reset();
+  for (const auto& in : rec.inputs) planner->plan(in);
+  std::vector<double> total, cpu, perception, pointnet, decoder, projection, ranking;
+  for (auto* v : {&total, &cpu, &perception, &pointnet, &decoder, &projection, &ranking}) v->reserve(o.repeats);
+  int failed = 0;
+  for (int r = 0; r < o.repeats; ++r) {
+    const int i = r % frames;
+    if (i == 0) planner->reset();  // scan times must not go backwards
+    const double cpu_start = thread_cpu_ms();
+    const auto start = std::chrono::steady_clock::now();
+    const planners::PlannerOutput out = planner->plan(rec.inputs[i]);
+    total.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    cpu.push_back(thread_cpu_ms() - cpu_start);
+    if (!out.ok) ++failed;
+    const auto& t = planner->last_timing();
+    perception.push_back(t.perception);
+    pointnet.push_back(t.pointnet);
+    decoder.push_back(t.decoder);
+    projection.push_back(t.projection);
+    ranking.push_back(t.ranking);
+  }
+  const Summary cycle = summarize(total), cycle_cpu = summarize(cpu);
+  const Summary sp = summarize(perception), sn = summarize(pointnet), sd = summarize(decoder),
+                sj = summarize(projection), sr = summarize(ranking);
+
+  const auto& net = planner->model().network();
+  std::printf("policy %s (%s model), batch %d, %d projection iterations, %d obstacle points, one core\n",
+              planner->name().c_str(), model_name.c_str(), o.batch, o.iterations, settings.projection.obstacles);
+  std::printf("  network: PointNet widths ");
+  for (std::size_t i = 0; i < net.pointnet_widths.size(); ++i)
+    std::printf("%s%d", i ? "-" : "", net.pointnet_widths[i]);
+  std::printf(", features %d, decoder %d x %d\n", net.features, net.layers, net.hidden);
+  std::printf("  inputs:  %d scans of %s (follower's drive), replayed\n", frames, scenario.name.c_str());
+  std::printf("  cycle:   median %.3f ms, p99 %.3f ms, mean %.3f ms, min %.3f ms (%d cycles, %d without a plan)\n",
+              cycle.median, cycle.p99, cycle.mean, cycle.min, o.repeats, failed);
+  std::printf("  CPU:     median %.3f ms, p99 %.3f ms (this thread's CPU time: other processes' time slices excluded)\n",
+              cycle_cpu.median, cycle_cpu.p99);
+  std::printf("  split (medians): perception %.3f, PointNet %.3f, decoder %.3f, projection %.3f, ranking %.3f ms\n",
+              sp.median, sn.median, sd.median, sj.median, sr.median);
+
+  if (!o.json_path.empty()) {
+    const nlohmann::json doc = {
+        {"benchmark", "policy"},
+        {"planner", planner->name()},
+        {"model", model_name},
+        {"batch", o.batch},
+        {"iterations", o.iterations},
+        {"obstacles", settings.projection.obstacles},
+        {"scenario", scenario.name},
+        {"frames", frames},
+        {"repeats", o.repeats},
+        {"failed", failed},
+        {"median_ms", cycle.median},
+        {"p99_ms", cycle.p99},
+        {"mean_ms", cycle.mean},
+        {"min_ms", cycle.min},
+        {"cpu_median_ms", cycle_cpu.median},
+        {"cpu_p99_ms", cycle_cpu.p99},
+        {"split_median_ms",
+         {{"perception", sp.median}, {"pointnet", sn.median}, {"decoder", sd.median}, {"projection", sj.median},
+          {"ranking", sr.median}}}};
+    std::ofstream out(o.json_path);
+    if (!(out << doc.dump(2) << "\n")) {
+      std::cerr << "occtrack bench policy: " << o.json_path << ": cannot write the file\n";
+      return kExitInputError;
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_bench_policy_command(CLI::App& bench, int& exit_code) {
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = bench.add_subcommand("policy", "Time the learned policy's planning cycle on realistic scans");
+  auto* model = cmd->add_option("--model", o->model, "Model file (default: the shipped model of the variant)");
+  cmd->add_flag("--random", o->random, "Use random weights of the default sizes instead of a model file")
+      ->excludes(model);
+  cmd->add_option("--variant", o->variant, "Model variant")
+      ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
+      ->capture_default_str();
+  cmd->add_option("--batch", o->batch, "Latent samples per cycle (B)")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--iterations", o->iterations, "Projection iterations per cycle (K)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--repeats", o->repeats, "Timed cycles")->check(CLI::Range(1, 10000000))->capture_default_str();
+  cmd->add_option("--scenario", o->scenario, std::string("Scenario whose scans are replayed (default ") +
+                                                  kDefaultScenario + ")");
+  cmd->add_option("--seconds", o->seconds, "Seconds of the follower's drive recorded")
+      ->check(CLI::Range(0.05, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Seed of the latent samples (and of the random weights)")->capture_default_str();
+  cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
+  cmd->callback([o, &exit_code]() {
+    try {
+      exit_code = run(*o);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack bench policy: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+}
+
+}  // namespace occtrack::app

@@ -1,0 +1,81 @@
+// The learned policy as a planner (shared/spec/policy.md, "Planning cycle"; docs/learning.md, "Post-processing
+// and the cycle"): perception, PointNet once, B latent samples through the decoder, post-processing, the
+// projection from each sample's initial guess, ranking; the cheapest projected trajectory is the plan.
+//
+// One class covers the three variants trained on the same data:
+//   cvae     (planner "cvae"):         the decoder predicts xi_bar, lambda0, via points and q = (d_min, d_max,
+//                                      terminal); the projection makes every sample feasible.
+//   fixed-q  (planner "cvae-fixed-q"): as cvae, but q is nominal, as Proj-CEM sets it.
+//   bc       (planner "bc"):           no projection; the decoder's xi_bar are ranked as they are.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/planners/ranking.hpp"
+#include "occtrack/policy/model.hpp"
+#include "occtrack/projection/settings.hpp"
+
+namespace occtrack::planners {
+
+struct LearnedPolicySettings {
+  policy::Variant variant = policy::Variant::cvae;
+  std::string model_path;      ///< the model file; its variant must be `variant` (default_model_path() when empty)
+  int batch = 30;              ///< B, latent samples per cycle (5 for constrained hardware)
+  std::uint64_t seed = 1;      ///< of the latent samples; reset() starts the sequence over
+  int candidates_kept = 30;    ///< projected samples returned for figures (at most B)
+  /// The optimizer run at every cycle; must be the one the model was trained through (Model::check_projection),
+  /// except for the iteration count, which may exceed training's. batch is set from `batch`.
+  projection::Settings projection = [] {
+    projection::Settings s;
+    s.iterations = 50;
+    return s;
+  }();
+  perception::Settings perception = [] {
+    perception::Settings s;
+    s.estimate_velocity = true;
+    return s;
+  }();
+  RankingSettings ranking;
+};
+
+/// The planner's name for a variant: "cvae", "bc", "cvae-fixed-q".
+std::string learned_planner_name(policy::Variant variant);
+/// The shipped model of a variant: OCCTRACK_MODEL_DIR/{cvae,bc,fixed-q}.safetensors.
+std::string default_model_path(policy::Variant variant);
+
+class LearnedPolicy final : public Planner {
+ public:
+  /// Where one cycle's time went, milliseconds (last plan() call).
+  struct Timing {
+    double perception = 0, pointnet = 0, decoder = 0, projection = 0, ranking = 0, total = 0;
+  };
+
+  /// Loads settings.model_path (default_model_path(variant) when empty). Throws io::InputError when the file
+  /// is missing (saying how to get one), refused by policy::Model, of another variant, or trained for other
+  /// projection, perception (cloud and nearest sizes) or band settings; std::invalid_argument for unusable
+  /// settings.
+  explicit LearnedPolicy(const LearnedPolicySettings& settings);
+  /// With a model already loaded (tests, benchmarks); settings.model_path is ignored. Same checks.
+  LearnedPolicy(const LearnedPolicySettings& settings, policy::Model model);
+  ~LearnedPolicy() override;
+
+  std::string name() const override;
+  void reset() override;
+  /// One cycle. After the first call, the networks, the sampling and the projection allocate nothing; the
+  /// frame change (Context::observe), the ranking, fixed-q's nominal q (Context::fill_row) and the output
+  /// (plan, candidates) still do.
+  PlannerOutput plan(const PlannerInput& input) override;
+
+  const Timing& last_timing() const;
+  const policy::Model& model() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace occtrack::planners

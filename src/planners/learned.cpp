@@ -1,0 +1,270 @@
+#include "occtrack/planners/learned.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <random>
+#include <stdexcept>
+
+#include "context.hpp"
+#include "occtrack/projection/projector.hpp"
+
+#ifndef OCCTRACK_MODEL_DIR
+#define OCCTRACK_MODEL_DIR "models"
+#endif
+
+namespace occtrack::planners {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+projection::Settings batch_settings(const LearnedPolicySettings& s) {
+  projection::Settings p = s.projection;
+  p.batch = s.batch;
+  return p;
+}
+
+policy::Model load_model(const LearnedPolicySettings& s) {
+  const std::string path = s.model_path.empty() ? default_model_path(s.variant) : s.model_path;
+  const std::string planner = learned_planner_name(s.variant);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw io::InputError("planner " + planner + ": no model file at " + path + ". Train one (`occtrack train`, see " +
+                         "README) and pass it with --model FILE, or time the planner on random weights with " +
+                         "`occtrack bench policy --random`");
+  return policy::Model::load(path);
+}
+
+}  // namespace
+
+std::string learned_planner_name(policy::Variant variant) {
+  switch (variant) {
+    case policy::Variant::cvae: return "cvae";
+    case policy::Variant::bc: return "bc";
+    case policy::Variant::fixed_q: return "cvae-fixed-q";
+  }
+  return "?";
+}
+
+std::string default_model_path(policy::Variant variant) {
+  return std::string(OCCTRACK_MODEL_DIR) + "/" + policy::to_string(variant) + ".safetensors";
+}
+
+struct LearnedPolicy::Impl {
+  LearnedPolicySettings settings;
+  policy::Model model;
+  detail::Context context;
+  std::optional<projection::Projector<float>> projector;  // none for bc
+  projection::Problem<float> problem;
+  projection::Result<float> result;
+  detail::Frame frame;
+  std::mt19937_64 rng;
+  std::normal_distribution<double> normal{0.0, 1.0};
+  Timing timing;
+
+  // Per-cycle buffers, sized once.
+  policy::Cloud cloud;
+  Eigen::VectorXf observation, features;
+  policy::Rows z, outputs;
+  Eigen::RowVectorXf robot_velocity, target, obstacles;
+  Eigen::RowVectorXd xi, nominal;
+  std::vector<double> costs;
+  std::vector<char> usable;
+
+  Impl(const LearnedPolicySettings& s, policy::Model m)
+      : settings(s), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
+    const std::string planner = learned_planner_name(s.variant);
+    if (s.batch < 1) throw std::invalid_argument("planner " + planner + ": batch must be at least 1");
+    if (s.candidates_kept < 0) throw std::invalid_argument("planner " + planner + ": candidates_kept must not be negative");
+    if (s.perception.nearest_count != s.projection.obstacles)
+      throw std::invalid_argument("planner " + planner + ": perception.nearest_count must equal projection.obstacles");
+    model.require_variant(s.variant, planner);
+    const projection::Settings p = batch_settings(s);
+    model.check_projection(p);
+    const policy::NetworkConfig& net = model.network();
+    if (net.cloud_points != s.perception.cloud_size)
+      throw io::InputError(model.source() + ": network.cloud_points is " + std::to_string(net.cloud_points) +
+                           " in the model, the planner's perception gives " + std::to_string(s.perception.cloud_size));
+    if (const auto& band = model.band()) {
+      const core::TrackingBand& mine = s.ranking.band;
+      auto differ = [&](const char* field, double model_value, double planner_value) {
+        if (model_value != planner_value)
+          throw io::InputError(model.source() + ": band." + field + " is " + std::to_string(model_value) +
+                               " in the model, the planner uses " + std::to_string(planner_value));
+      };
+      differ("min", band->min, mine.min);
+      differ("reference", band->reference, mine.reference);
+      differ("max", band->max, mine.max);
+    }
+    if (s.variant != policy::Variant::bc) {
+      projector.emplace(p);
+      problem = projector->make_problem();
+      result = projector->make_result();
+    }
+    model.reserve(s.batch, s.perception.cloud_size);
+    const int n2 = 2 * p.coefficients();
+    cloud.resize(s.perception.cloud_size, 2);
+    observation.resize(net.observation);
+    features.resize(net.features);
+    z.resize(s.batch, net.latent);
+    outputs.resize(s.batch, net.outputs);
+    robot_velocity.resize(2);
+    target.resize(4);
+    obstacles.resize(4 * p.obstacles);
+    xi.resize(n2);
+    nominal.resize(n2);
+    costs.resize(s.batch);
+    usable.resize(s.batch);
+  }
+
+  // Problem row b from decoded sample b (docs/learning.md, post-processing steps 2 and 3). False when the
+  // sample is not finite: the row then holds the straight line to the goal, so that the batch stays
+  // solvable, and the sample is not ranked.
+  bool fill_row(int b) {
+    const policy::OutputLayout& y = model.layout();
+    const int n2 = static_cast<int>(xi.size()), m = settings.projection.steps;
+    const auto row = outputs.row(b);
+    if (!row.allFinite()) {
+      context.fill_row(problem, b, context.straight_line(context.goal(frame)), frame);
+      return false;
+    }
+    if (settings.variant == policy::Variant::fixed_q) {
+      // Nominal q read off xi_bar, as Proj-CEM sets it; via points and lambda0 stay the decoder's.
+      nominal = row.segment(y.xi_bar, n2).cast<double>();
+      context.fill_row(problem, b, nominal, frame);
+    } else {
+      problem.robot_velocity.row(b) = robot_velocity;
+      problem.target.row(b) = target;
+      problem.obstacles.row(b) = obstacles;
+      problem.terminal.row(b) = row.segment(y.terminal, 4);
+      problem.distance_min.row(b) = row.segment(y.distance_min, m);
+      problem.distance_max.row(b) = row.segment(y.distance_max, m);
+      problem.xi_bar.row(b) = row.segment(y.xi_bar, n2);
+    }
+    problem.via_points.row(b) = row.segment(y.via, 4);
+    problem.lambda0.row(b) = row.segment(y.lambda0, n2);
+    return true;
+  }
+};
+
+LearnedPolicy::LearnedPolicy(const LearnedPolicySettings& settings) : LearnedPolicy(settings, load_model(settings)) {}
+
+LearnedPolicy::LearnedPolicy(const LearnedPolicySettings& settings, policy::Model model)
+    : impl_(std::make_unique<Impl>(settings, std::move(model))) {}
+
+LearnedPolicy::~LearnedPolicy() = default;
+
+std::string LearnedPolicy::name() const { return learned_planner_name(impl_->settings.variant); }
+
+void LearnedPolicy::reset() {
+  impl_->context.reset();
+  impl_->rng.seed(impl_->settings.seed);
+  impl_->normal.reset();
+}
+
+const LearnedPolicy::Timing& LearnedPolicy::last_timing() const { return impl_->timing; }
+const policy::Model& LearnedPolicy::model() const { return impl_->model; }
+
+PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
+  const auto start = Clock::now();
+  Impl& s = *impl_;
+  const LearnedPolicySettings& cfg = s.settings;
+  const bool project = cfg.variant != policy::Variant::bc;
+  const int B = cfg.batch, n2 = static_cast<int>(s.xi.size());
+  PlannerOutput out;
+  std::string error;
+  s.timing = Timing{};
+  auto finish = [&]() {
+    out.compute_ms = ms_between(start, Clock::now());
+    s.timing.total = out.compute_ms;
+    return std::move(out);
+  };
+  auto brake = [&](const std::string& message) {
+    out.ok = false;
+    out.message = name() + ": " + message;
+    out.command_velocity.setZero();
+    return finish();
+  };
+
+  // 1. Observation (robot-centric).
+  if (!s.context.observe(input, s.frame, &error)) return brake(error);
+  const auto observed = Clock::now();
+  s.timing.perception = ms_between(start, observed);
+
+  // 2. PointNet on the distinct points: the cloud's rows past them repeat its first row, which changes no
+  //    max-pooled feature (perception.hpp, fixed cloud).
+  const auto& frame = s.frame;
+  const Eigen::Index distinct = std::max<Eigen::Index>(1, std::min(frame.occluders.rows(), frame.cloud.rows()));
+  s.cloud.topRows(distinct) = frame.cloud.topRows(distinct).cast<float>();
+  s.model.features(s.cloud.topRows(distinct), s.features);
+  const auto encoded = Clock::now();
+  s.timing.pointnet = ms_between(observed, encoded);
+
+  // 3-4. Latent samples, decoder, post-processing, one projection problem row per sample.
+  s.observation << static_cast<float>(frame.robot_velocity.x()), static_cast<float>(frame.robot_velocity.y()),
+      static_cast<float>(frame.target(0)), static_cast<float>(frame.target(1)), static_cast<float>(frame.target(2)),
+      static_cast<float>(frame.target(3));
+  for (int b = 0; b < B; ++b)
+    for (Eigen::Index j = 0; j < s.z.cols(); ++j) s.z(b, j) = static_cast<float>(s.normal(s.rng));
+  s.model.decode(s.z, s.observation, s.features, s.outputs);
+  s.model.postprocess(s.outputs, cfg.projection.speed_max, cfg.ranking.band.min);
+  if (project) {
+    s.robot_velocity = frame.robot_velocity.transpose().cast<float>();
+    s.target = frame.target.transpose().cast<float>();
+    s.obstacles = Eigen::Map<const Eigen::RowVectorXd>(frame.nearest.data(), s.obstacles.size()).cast<float>();
+    for (int b = 0; b < B; ++b) s.usable[b] = s.fill_row(b);
+  } else {
+    for (int b = 0; b < B; ++b) s.usable[b] = s.outputs.row(b).allFinite();
+  }
+  const auto decoded = Clock::now();
+  s.timing.decoder = ms_between(encoded, decoded);
+
+  // 5. Projection from each sample's initial guess.
+  if (project) {
+    if (!s.projector->solve(s.problem, s.result, &error)) return brake("projection refused its input: " + error);
+  }
+  const auto projected = Clock::now();
+  s.timing.projection = ms_between(decoded, projected);
+
+  // 6. Ranking; the cheapest finite sample is the plan.
+  const int xi_bar = s.model.layout().xi_bar;
+  auto candidate = [&](int b) -> Eigen::RowVectorXd& {
+    if (project)
+      s.xi = s.result.xi.row(b).cast<double>();
+    else
+      s.xi = s.outputs.row(b).segment(xi_bar, n2).cast<double>();
+    return s.xi;
+  };
+  int best = -1;
+  for (int b = 0; b < B; ++b) {
+    s.costs[b] = INFINITY;
+    if (!s.usable[b]) continue;
+    const Eigen::RowVectorXd& xi = candidate(b);
+    if (!xi.allFinite()) continue;
+    s.costs[b] = s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders, frame.scan).total;
+    if (std::isfinite(s.costs[b]) && (best < 0 || s.costs[b] < s.costs[best])) best = b;
+  }
+  if (best < 0) {
+    s.timing.ranking = ms_between(projected, Clock::now());
+    return brake("no finite candidate among " + std::to_string(B) + " samples");
+  }
+
+  // 7. Command and the world-frame plan.
+  const Eigen::RowVectorXd& plan = candidate(best);
+  out.command_velocity = s.context.command(plan);
+  out.plan = s.context.world_positions(plan, frame);
+  const int kept = std::min(cfg.candidates_kept, B);
+  out.candidates.reserve(kept);
+  for (int b = 0; b < kept; ++b)
+    if (s.usable[b] && std::isfinite(s.costs[b])) out.candidates.push_back(s.context.world_positions(candidate(b), frame));
+  s.timing.ranking = ms_between(projected, Clock::now());
+  return finish();
+}
+
+}  // namespace occtrack::planners
