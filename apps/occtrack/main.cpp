@@ -12,6 +12,10 @@ int main(int argc, char** argv) {
   occtrack::app::add_bench_command(app, exit_code);
   occtrack::app::add_run_command(app, exit_code);
   occtrack::app::add_scenario_command(app, exit_code);
+#ifdef OCCTRACK_HAVE_LEARNING
+  occtrack::app::add_train_command(app, exit_code);
+#endif
+  occtrack::app::add_dataset_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

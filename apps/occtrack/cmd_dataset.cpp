@@ -1,0 +1,288 @@
+// occtrack dataset generate --out FILE [--episodes 8] [--seed 5000] [--duration 40]
+//                           [--worlds forest,boxes,mixed,dynamic] [--speeds 1,1.5,2] [--label-every 1]
+//                           [--driver expert|projcem|NAME] [--model FILE] [--jobs J]
+//                           [--expert-samples 2000] [--expert-iterations 4]
+// occtrack dataset info FILE
+// occtrack dataset merge --out FILE IN IN...
+//
+// Demonstrations for training (docs/learning.md, "Dataset file"): closed-loop episodes on generated worlds
+// whose seeds are outside the benchmark's 1000-1999, labelled by the offline Proj-CEM expert, written as one
+// safetensors file. `info` prints a file's metadata, tensor shapes and statistics; `merge` concatenates
+// files made with the same projection and perception settings (episode indices renumbered).
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "commands.hpp"
+#include "episode_common.hpp"
+#include "occtrack/io/safetensors.hpp"
+#include "occtrack/sim/demonstrations.hpp"
+
+namespace occtrack::app {
+
+namespace {
+
+struct GenerateOptions {
+  std::string out;
+  int episodes = 8;
+  std::uint64_t seed = 5000;
+  double duration = 40.0;
+  std::vector<std::string> worlds = {"forest", "boxes", "mixed", "dynamic"};
+  std::vector<double> speeds = {1.0, 1.5, 2.0};
+  int label_every = 1;
+  std::string driver = "expert";
+  std::string model;
+  int jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  int expert_samples = 2000;
+  int expert_iterations = 4;
+};
+
+std::string join(const std::vector<std::string>& items, const char* separator = ",") {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : separator) + item;
+  return out;
+}
+
+std::string number_text(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+/// The settings as a command line, for the file's provenance. --out and --jobs are left out: they do not
+/// change the rows, and the same settings should give the same bytes.
+std::string speeds_text(const GenerateOptions& o) {
+  std::vector<std::string> speeds;
+  for (double v : o.speeds) speeds.push_back(number_text(v));
+  return join(speeds);
+}
+
+std::string canonical_command(const GenerateOptions& o) {
+  std::string text = "occtrack dataset generate --episodes " + std::to_string(o.episodes) + " --seed " +
+                     std::to_string(o.seed) + " --duration " + number_text(o.duration) + " --worlds " +
+                     join(o.worlds) + " --speeds " + speeds_text(o) + " --label-every " +
+                     std::to_string(o.label_every) + " --driver " + o.driver;
+  if (!o.model.empty()) text += " --model " + o.model;
+  text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
+          std::to_string(o.expert_iterations);
+  return text;
+}
+
+/// Which command-line option sets the settings field a validate() message starts with.
+std::string option_of(const std::string& message) {
+  static const std::pair<const char*, const char*> fields[] = {
+      {"episodes", "--episodes"},     {"first_seed", "--seed"},          {"worlds", "--worlds"},
+      {"target_speeds", "--speeds"},  {"duration", "--duration"},        {"label_every", "--label-every"},
+      {"driver", "--driver"},         {"jobs", "--jobs"},                {"expert.samples", "--expert-samples"},
+      {"expert.cem_iterations", "--expert-iterations"}};
+  for (const auto& [field, option] : fields)
+    if (message.rfind(field, 0) == 0) return std::string(option) + ": ";
+  return "";
+}
+
+std::string duration_text(double seconds) {
+  char text[32];
+  if (seconds < 120)
+    std::snprintf(text, sizeof text, "%.0f s", seconds);
+  else if (seconds < 7200)
+    std::snprintf(text, sizeof text, "%.1f min", seconds / 60);
+  else
+    std::snprintf(text, sizeof text, "%.1f h", seconds / 3600);
+  return text;
+}
+
+int generate(const GenerateOptions& o) {
+  const char* const who = "occtrack dataset generate: ";
+  sim::DemonstrationSettings s;
+  s.episodes = o.episodes;
+  s.first_seed = o.seed;
+  s.worlds.clear();
+  for (const std::string& name : o.worlds) {
+    const auto world = sim::parse_demonstration_world(name);
+    if (!world) {
+      std::cerr << who << "--worlds: unknown world kind '" << name << "' (forest, boxes, mixed, dynamic)\n";
+      return kExitInputError;
+    }
+    s.worlds.push_back(*world);
+  }
+  s.target_speeds = o.speeds;
+  s.duration = o.duration;
+  s.label_every = o.label_every;
+  s.driver = o.driver;
+  s.model = o.model;
+  s.jobs = o.jobs;
+  s.expert = planners::ProjCemSettings::offline_expert(1);
+  s.expert.samples = o.expert_samples;
+  s.expert.cem_iterations = o.expert_iterations;
+  std::string created_by = "occtrack";
+#ifdef OCCTRACK_VERSION
+  created_by += " " OCCTRACK_VERSION;
+#endif
+  s.created_by = created_by + ": " + canonical_command(o);
+  std::string error;
+  if (!s.validate(&error)) {
+    std::cerr << who << option_of(error) << error << "\n";
+    return kExitInputError;
+  }
+  if (!o.model.empty() && o.driver == "expert") {
+    std::cerr << who << "--model: only a learned --driver uses a model (the driver is the expert)\n";
+    return kExitInputError;
+  }
+
+  const int jobs = std::min(o.jobs, o.episodes);
+  std::fprintf(stderr,
+               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; target speeds %s m/s), driver %s, "
+               "expert %d samples x %d CEM iterations, labelling 1 cycle in %d, %d jobs\n",
+               o.episodes, o.duration, static_cast<unsigned long long>(o.seed),
+               static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)), join(o.worlds).c_str(),
+               speeds_text(o).c_str(),
+               o.driver.c_str(), o.expert_samples, o.expert_iterations, o.label_every, jobs);
+  Progress progress("dataset");
+  sim::DemonstrationReport report;
+  const sim::Demonstrations data = sim::generate_demonstrations(s, &report, [&](const sim::DemonstrationProgress& p) {
+    std::string detail = "episodes " + std::to_string(p.episodes_done) + "/" + std::to_string(p.episodes_total) +
+                         ", " + std::to_string(p.rows) + " rows, " + duration_text(p.elapsed_s);
+    if (p.fraction > 0.01 && p.fraction < 1.0)
+      detail += ", ETA " + duration_text(p.elapsed_s * (1.0 - p.fraction) / p.fraction);
+    progress.update(p.fraction, detail);
+  });
+  sim::write_demonstrations(o.out, data);
+
+  for (const std::string& failure : report.failures) std::fprintf(stderr, "skipped episode %s\n", failure.c_str());
+  const double rate = report.seconds > 0 ? static_cast<double>(report.rows) / report.seconds : 0.0;
+  std::printf("wrote %s: %lld rows from %d episodes (%d skipped by the scenario generator) in %.1f s, %.2f rows/s\n",
+              o.out.c_str(), static_cast<long long>(report.rows), report.episodes, report.episodes_failed,
+              report.seconds, rate);
+  std::printf("  cycles %lld, labelled %lld, skipped %lld (expert failed %lld, non-finite %lld, fit %lld); "
+              "worst fit residual %.1e m; expert %.1f ms per labelled cycle\n",
+              static_cast<long long>(report.cycles), static_cast<long long>(report.labelled),
+              static_cast<long long>(report.skipped()), static_cast<long long>(report.skipped_failed),
+              static_cast<long long>(report.skipped_nonfinite), static_cast<long long>(report.skipped_fit),
+              report.worst_fit_residual,
+              report.labelled > 0 ? report.expert_ms / static_cast<double>(report.labelled) : 0.0);
+  return kExitOk;
+}
+
+int info(const std::string& path) {
+  const io::TensorFile file = io::read_safetensors(path);
+  const sim::Demonstrations data = sim::from_tensor_file(file);  // validates format and shapes
+  std::printf("%s: %lld rows\n", path.c_str(), static_cast<long long>(data.rows));
+  std::printf("metadata:\n");
+  for (const auto& [key, value] : file.metadata) std::printf("  %-11s %s\n", key.c_str(), value.c_str());
+  std::printf("tensors:\n");
+  for (const auto& [name, tensor] : file.tensors)
+    std::printf("  %-12s %s %s\n", name.c_str(), io::dtype_name(tensor.dtype), tensor.shape_text().c_str());
+  const sim::DemonstrationStatistics st = sim::demonstration_statistics(data);
+  std::printf("statistics (%d episodes):\n", st.episodes);
+  static const char* const columns[sim::kObservationSize] = {"robot vx", "robot vy", "target x", "target y",
+                                                             "target vx", "target vy"};
+  for (int j = 0; j < sim::kObservationSize; ++j)
+    std::printf("  observation %-9s mean %7.3f  std %6.3f\n", columns[j], st.observation_mean(j),
+                st.observation_std(j));
+  std::printf("  target distance        mean %7.3f m\n", st.target_distance_mean);
+  std::printf("  expert plan speed      mean %7.3f  std %6.3f  max %6.3f m/s (over the horizon); first 0.1 s "
+              "mean %.3f m/s\n",
+              st.plan_speed_mean, st.plan_speed_std, st.plan_speed_max, st.start_speed_mean);
+  std::printf("  expert cost            mean %7.3f  std %6.3f  min %.3f  max %.3f\n", st.cost_mean, st.cost_std,
+              st.cost_min, st.cost_max);
+  return kExitOk;
+}
+
+int merge(const std::string& out, const std::vector<std::string>& inputs) {
+  sim::Demonstrations merged;
+  nlohmann::json sources = nlohmann::json::array();
+  for (const std::string& path : inputs) {
+    const sim::Demonstrations part = sim::read_demonstrations(path);
+    try {
+      sim::append_demonstrations(merged, part);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "occtrack dataset merge: " << path << ": " << e.what() << "\n";
+      return kExitInputError;
+    }
+    const auto generator = part.metadata.find("generator");
+    const auto driver = part.metadata.find("driver");
+    sources.push_back({{"file", path},
+                       {"rows", part.rows},
+                       {"generator", generator == part.metadata.end() ? "" : generator->second},
+                       {"driver", driver == part.metadata.end() ? "" : driver->second}});
+  }
+  merged.metadata["merged_from"] = sources.dump();
+  sim::write_demonstrations(out, merged);
+  std::printf("wrote %s: %lld rows from %zu files\n", out.c_str(), static_cast<long long>(merged.rows),
+              inputs.size());
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_dataset_command(CLI::App& app, int& exit_code) {
+  CLI::App* dataset = app.add_subcommand("dataset", "Make and inspect demonstration files for training");
+  dataset->require_subcommand(1);
+
+  auto o = std::make_shared<GenerateOptions>();
+  CLI::App* gen = dataset->add_subcommand(
+      "generate",
+      "Run closed-loop episodes on generated worlds (seeds outside the benchmark's 1000-1999) and write the "
+      "expert's labelled planning cycles as a safetensors dataset");
+  gen->add_option("--out", o->out, "Dataset file to write (safetensors)")->required();
+  gen->add_option("--episodes", o->episodes, "Episodes, each in a world of its own")->capture_default_str();
+  gen->add_option("--seed", o->seed, "First seed; episode i uses seed + i (none may fall in 1000-1999)")
+      ->capture_default_str();
+  gen->add_option("--duration", o->duration, "Simulated seconds per episode")->capture_default_str();
+  gen->add_option("--worlds", o->worlds, "World kinds, used in turn: forest, boxes, mixed, dynamic")
+      ->delimiter(',')
+      ->capture_default_str();
+  gen->add_option("--speeds", o->speeds, "Target top speeds (m/s), used in turn after every world kind")
+      ->delimiter(',')
+      ->capture_default_str();
+  gen->add_option("--label-every", o->label_every, "Label one planning cycle in this many")->capture_default_str();
+  std::string names = join(planners::planner_names(), ", ");
+  gen->add_option("--driver", o->driver,
+                  "Who drives: expert (the labeller itself), or a planner (" + names +
+                      ") while the expert labels (DAgger with a learned planner and --model)")
+      ->capture_default_str();
+  gen->add_option("--model", o->model, "Model file of a learned --driver");
+  gen->add_option("--jobs", o->jobs, "Episodes run at the same time (default: every hardware thread)")
+      ->capture_default_str();
+  gen->add_option("--expert-samples", o->expert_samples, "Expert's samples per CEM iteration")->capture_default_str();
+  gen->add_option("--expert-iterations", o->expert_iterations, "Expert's CEM iterations")->capture_default_str();
+  gen->callback([o, &exit_code]() {
+    try {
+      exit_code = generate(*o);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack dataset generate: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+
+  auto info_path = std::make_shared<std::string>();
+  CLI::App* inf = dataset->add_subcommand("info", "Print a dataset's rows, metadata, tensor shapes and statistics");
+  inf->add_option("file", *info_path, "Dataset file (occtrack.dataset.v1)")->required();
+  inf->callback([info_path, &exit_code]() {
+    try {
+      exit_code = info(*info_path);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack dataset info: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+
+  auto merge_out = std::make_shared<std::string>();
+  auto merge_inputs = std::make_shared<std::vector<std::string>>();
+  CLI::App* mrg = dataset->add_subcommand(
+      "merge", "Concatenate datasets made with the same projection and perception settings (episodes renumbered)");
+  mrg->add_option("--out", *merge_out, "Dataset file to write")->required();
+  mrg->add_option("files", *merge_inputs, "Dataset files, in order")->required();
+  mrg->callback([merge_out, merge_inputs, &exit_code]() {
+    try {
+      exit_code = merge(*merge_out, *merge_inputs);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack dataset merge: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+}
+
+}  // namespace occtrack::app

@@ -1,0 +1,398 @@
+// Demonstrations: the dataset file's layout and metadata (docs/learning.md), rows that hold exactly what the
+// expert saw and planned, determinism whatever the thread count, and refusal of benchmark seeds and bad
+// settings.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <unistd.h>
+
+#include "occtrack/io/error.hpp"
+#include "occtrack/io/safetensors.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/sim/demonstrations.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
+
+using namespace occtrack;
+
+namespace {
+
+/// A generation that runs in seconds: two 3 s episodes, an expert with 64 samples and one CEM iteration.
+sim::DemonstrationSettings tiny() {
+  sim::DemonstrationSettings s;
+  s.episodes = 2;
+  s.first_seed = 5000;
+  s.duration = 3.0;
+  s.worlds = {sim::DemonstrationWorld::forest, sim::DemonstrationWorld::dynamic};
+  s.expert.samples = 64;
+  s.expert.cem_iterations = 1;
+  s.expert.projection.iterations = 20;
+  s.jobs = 1;
+  s.created_by = "test_demonstrations";
+  return s;
+}
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("occtrack_test_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+/// Wraps the expert and keeps what it was given and what it returned.
+class Spy final : public planners::Planner {
+ public:
+  struct Call {
+    planners::PlannerInput input;
+    core::Scan scan;
+    planners::PlannerOutput output;
+  };
+  explicit Spy(const planners::ProjCemSettings& s) : inner_(s) {}
+  std::string name() const override { return "spy"; }
+  void reset() override {
+    inner_.reset();
+    calls.clear();
+  }
+  planners::PlannerOutput plan(const planners::PlannerInput& input) override {
+    Call call{input, *input.scan, inner_.plan(input)};
+    call.input.scan = nullptr;
+    calls.push_back(call);
+    return call.output;
+  }
+  std::vector<Call> calls;
+
+ private:
+  planners::ProjCem inner_;
+};
+
+core::Scenario orbit(double duration) {
+  core::Scenario s = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
+  s.duration = duration;
+  return s;
+}
+
+/// Checks every row of `recorder` against the expert calls it was made from: the observation as given, the
+/// cloud and obstacles of a perception fed the expert's scans, and coefficients that reproduce the plan.
+void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const std::vector<Spy::Call>& calls,
+                             const planners::ProjCemSettings& expert, int label_every, bool expert_drives) {
+  const core::BernsteinBasis basis =
+      core::bernstein_basis(expert.projection.degree, expert.projection.steps, expert.projection.horizon);
+  const int n = expert.projection.coefficients();
+  perception::Perception reference(expert.perception);
+  perception::Observation seen;
+  std::size_t row = 0;
+  for (std::size_t c = 0; c < calls.size(); ++c) {
+    const Spy::Call& call = calls[c];
+    ASSERT_TRUE(reference.process(call.scan, call.input.robot_position, seen));
+    const bool labelled = !expert_drives || c % static_cast<std::size_t>(label_every) == 0;
+    if (!labelled) continue;
+    ASSERT_TRUE(call.output.ok) << call.output.message;
+    ASSERT_LT(row, recorder.rows().size());
+    const sim::DemonstrationRow& r = recorder.rows()[row++];
+    EXPECT_EQ(r.time, call.input.time);
+    EXPECT_EQ(r.observation.segment<2>(0), call.input.robot_velocity);
+    EXPECT_EQ(r.observation.segment<2>(2), call.input.target_position - call.input.robot_position);
+    EXPECT_EQ(r.observation.segment<2>(4), call.input.target_velocity);
+    EXPECT_EQ(r.cloud, seen.cloud) << "cycle " << c;
+    EXPECT_EQ(r.obstacles, seen.nearest) << "cycle " << c << ": velocity tracks differ from the expert's";
+    double worst = 0.0;
+    for (int k = 0; k < basis.steps; ++k) {
+      const Eigen::Vector2d fitted(basis.P.row(k).dot(r.expert_xi.head(n)), basis.P.row(k).dot(r.expert_xi.tail(n)));
+      worst = std::max(worst, (fitted - (call.output.plan[static_cast<std::size_t>(k)] - call.input.robot_position))
+                                  .cwiseAbs()
+                                  .maxCoeff());
+    }
+    EXPECT_LT(worst, 1e-6) << "cycle " << c;
+    EXPECT_LE(r.fit_residual, sim::kPlanFitTolerance);
+    EXPECT_TRUE(std::isfinite(r.expert_cost));
+    EXPECT_GE(r.expert_cost, 0.0);
+  }
+  EXPECT_EQ(row, recorder.rows().size());
+}
+
+}  // namespace
+
+TEST(Demonstrations, FitCoefficientsRecoversBernsteinCoefficients) {
+  const core::BernsteinBasis basis = core::bernstein_basis(10, 100, 5.0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal(0.0, 3.0);
+  Eigen::RowVectorXd xi(22);
+  for (int i = 0; i < 22; ++i) xi(i) = normal(rng);
+  const core::Vec2 origin(12.5, -7.25);
+  std::vector<core::Vec2> positions(100);
+  for (int k = 0; k < 100; ++k)
+    positions[k] = origin + core::Vec2(basis.P.row(k).dot(xi.head(11)), basis.P.row(k).dot(xi.tail(11)));
+  double residual = 1.0;
+  const Eigen::RowVectorXd back = sim::fit_coefficients(basis, positions, origin, &residual);
+  EXPECT_LT((back - xi).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT(residual, 1e-12);
+  positions[40].x() += 0.01;  // not a Bernstein trajectory any more
+  sim::fit_coefficients(basis, positions, origin, &residual);
+  EXPECT_GT(residual, sim::kPlanFitTolerance);
+  positions.pop_back();
+  EXPECT_THROW(sim::fit_coefficients(basis, positions, origin), std::invalid_argument);
+}
+
+TEST(Demonstrations, RowsHoldWhatTheDrivingExpertSawAndPlanned) {
+  planners::ProjCemSettings expert = tiny().expert;
+  auto spy = std::make_unique<Spy>(expert);
+  Spy* log = spy.get();
+  sim::DemonstrationRecorder recorder(std::move(spy), nullptr, expert, 2);
+  sim::run_episode(orbit(2.0), recorder, {});
+  ASSERT_EQ(log->calls.size(), 40u) << "the driving expert runs once per cycle";
+  EXPECT_EQ(recorder.report().labelled, 20);
+  EXPECT_EQ(recorder.report().rows, 20);
+  EXPECT_EQ(recorder.report().skipped(), 0);
+  EXPECT_EQ(recorder.name(), "spy");
+  expect_rows_match_calls(recorder, log->calls, expert, 2, true);
+}
+
+TEST(Demonstrations, AnotherDriverDrivesWhileTheExpertLabelsEveryThirdCycle) {
+  planners::ProjCemSettings expert = tiny().expert;
+  auto spy = std::make_unique<Spy>(expert);
+  Spy* log = spy.get();
+  sim::DemonstrationRecorder recorder(std::move(spy), planners::make_planner("follower"), expert, 3);
+  const sim::EpisodeResult result = sim::run_episode(orbit(2.0), recorder, {});
+  EXPECT_EQ(result.metrics.planner, "follower");
+  ASSERT_EQ(log->calls.size(), 14u) << "cycles 0, 3, ..., 39";
+  for (std::size_t c = 0; c < log->calls.size(); ++c) EXPECT_DOUBLE_EQ(log->calls[c].input.time, 0.15 * c);
+  EXPECT_EQ(recorder.report().cycles, 40);
+  EXPECT_EQ(recorder.report().rows, 14);
+  expect_rows_match_calls(recorder, log->calls, expert, 3, false);
+}
+
+TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
+  const sim::DemonstrationSettings settings = tiny();
+  sim::DemonstrationReport report;
+  const sim::Demonstrations data = sim::generate_demonstrations(settings, &report);
+  EXPECT_EQ(report.episodes, 2);
+  EXPECT_EQ(report.episodes_failed, 0);
+  EXPECT_EQ(report.cycles, 120);  // 2 x 3 s at 20 Hz
+  EXPECT_EQ(report.rows + report.skipped(), report.labelled);
+  EXPECT_EQ(report.labelled, 120);
+  ASSERT_GT(report.rows, 100);
+  EXPECT_LE(report.worst_fit_residual, sim::kPlanFitTolerance);
+
+  const std::string path = temp_path("demo.safetensors");
+  sim::write_demonstrations(path, data);
+  const io::TensorFile file = io::read_safetensors(path);
+  const std::int64_t S = report.rows;
+  EXPECT_EQ(file.at("observation", {S, 6}).dtype, io::DType::F32);
+  EXPECT_EQ(file.at("cloud", {S, 200, 2}).dtype, io::DType::F32);
+  EXPECT_EQ(file.at("obstacles", {S, 60, 4}).dtype, io::DType::F32);
+  EXPECT_EQ(file.at("expert_xi", {S, 22}).dtype, io::DType::F32);
+  EXPECT_EQ(file.at("expert_cost", {S}).dtype, io::DType::F32);
+  EXPECT_EQ(file.at("episode", {S}).dtype, io::DType::I32);
+  EXPECT_EQ(file.at("time", {S}).dtype, io::DType::F32);
+  EXPECT_EQ(file.tensors.size(), 7u);
+  EXPECT_EQ(file.meta("format"), "occtrack.dataset.v1");
+  EXPECT_EQ(file.meta("rows"), std::to_string(S));
+  EXPECT_EQ(file.meta("driver"), "expert");
+  EXPECT_EQ(file.meta("created_by"), "test_demonstrations");
+  const auto projection = nlohmann::json::parse(file.meta("projection"));
+  EXPECT_EQ(projection.at("degree"), 10);
+  EXPECT_EQ(projection.at("steps"), 100);
+  EXPECT_EQ(projection.at("iterations"), 20);
+  EXPECT_EQ(projection.at("via_steps"), nlohmann::json({49, 74}));
+  for (const char* key : {"horizon", "obstacle_radius", "speed_min", "speed_max", "accel_max", "rho"})
+    EXPECT_TRUE(projection.contains(key)) << key;
+  const auto perception = nlohmann::json::parse(file.meta("perception"));
+  EXPECT_EQ(perception.at("cloud_size"), 200);
+  EXPECT_EQ(perception.at("nearest_count"), 60);
+  EXPECT_EQ(perception.at("estimate_velocity"), true);
+  EXPECT_DOUBLE_EQ(perception.at("voxel_size").get<double>(), 0.19);
+  const auto expert = nlohmann::json::parse(file.meta("expert"));
+  EXPECT_EQ(expert.at("samples"), 64);
+  EXPECT_EQ(expert.at("cem_iterations"), 1);
+  const auto generator = nlohmann::json::parse(file.meta("generator"));
+  EXPECT_EQ(generator.at("world_kinds"), nlohmann::json({"forest", "dynamic"}));
+  EXPECT_EQ(generator.at("first_seed"), 5000);
+  EXPECT_EQ(generator.at("episodes"), 2);
+  EXPECT_EQ(generator.at("duration"), 3.0);
+  EXPECT_FALSE(generator.contains("jobs"));
+
+  const sim::Demonstrations back = sim::read_demonstrations(path);
+  EXPECT_EQ(back.rows, S);
+  EXPECT_EQ(back.observation, data.observation);
+  EXPECT_EQ(back.cloud, data.cloud);
+  EXPECT_EQ(back.obstacles, data.obstacles);
+  EXPECT_EQ(back.expert_xi, data.expert_xi);
+  EXPECT_EQ(back.expert_cost, data.expert_cost);
+  EXPECT_EQ(back.episode, data.episode);
+  EXPECT_EQ(back.time, data.time);
+  // Rows ordered by episode, both episodes present, each starting at t = 0.
+  EXPECT_TRUE(std::is_sorted(back.episode.begin(), back.episode.end()));
+  EXPECT_EQ(back.episode.front(), 0);
+  EXPECT_EQ(back.episode.back(), 1);
+  EXPECT_EQ(back.time.front(), 0.0f);
+  for (float t : back.time) EXPECT_TRUE(t >= 0.0f && t < 3.0f);
+  // The relative target is about 2 m away at the start (the generator's robot_distance).
+  EXPECT_NEAR(std::hypot(back.observation[2], back.observation[3]), 2.0, 0.6);
+
+  const sim::DemonstrationStatistics stats = sim::demonstration_statistics(back);
+  EXPECT_EQ(stats.episodes, 2);
+  EXPECT_GT(stats.plan_speed_mean, 0.0);
+  // Plausible speeds, not garbage: the projection's speed bound (2 m/s) is a penalty, not a hard limit, and
+  // this test's small expert (few samples, one CEM iteration) picks among few plans, so allow 50% over it.
+  EXPECT_LE(stats.plan_speed_max, 2.0 * 1.5);
+  std::filesystem::remove(path);
+}
+
+TEST(Demonstrations, SameSeedGivesIdenticalBytesWhateverTheJobs) {
+  sim::DemonstrationSettings settings = tiny();
+  settings.duration = 1.5;
+  settings.label_every = 2;
+  const auto one = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  settings.jobs = 2;
+  const auto two = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  EXPECT_TRUE(one == two) << "jobs 1 and 2 differ";
+  settings.first_seed = 6000;
+  const auto other = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  EXPECT_FALSE(one == other) << "another seed should make other worlds";
+}
+
+TEST(Demonstrations, BenchmarkSeedsAreRefusedWithTheSeedRange) {
+  sim::DemonstrationSettings s = tiny();
+  std::string error;
+  for (auto [first, episodes] : {std::pair<std::uint64_t, int>{1000, 1}, {1999, 1}, {1500, 3}, {990, 20}}) {
+    s.first_seed = first;
+    s.episodes = episodes;
+    EXPECT_FALSE(s.validate(&error)) << first << " + " << episodes;
+    EXPECT_NE(error.find("first_seed"), std::string::npos) << error;
+    EXPECT_NE(error.find("1000-1999"), std::string::npos) << error;
+  }
+  s.first_seed = 990;
+  s.episodes = 20;
+  try {
+    sim::generate_demonstrations(s);
+    ADD_FAILURE() << "benchmark seeds accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("1000-1999"), std::string::npos) << e.what();
+  }
+  for (auto [first, episodes] : {std::pair<std::uint64_t, int>{980, 20}, {2000, 5}, {0, 1000}}) {
+    s.first_seed = first;
+    s.episodes = episodes;
+    EXPECT_TRUE(s.validate(&error)) << error;
+  }
+}
+
+TEST(Demonstrations, BadSettingsAreNamed) {
+  const auto expect_refused = [](const sim::DemonstrationSettings& s, const std::string& field) {
+    std::string error;
+    EXPECT_FALSE(s.validate(&error)) << field;
+    EXPECT_EQ(error.rfind(field, 0), 0u) << "expected the message to start with " << field << ": " << error;
+  };
+  sim::DemonstrationSettings s = tiny();
+  EXPECT_TRUE(s.validate());
+  s.episodes = 0;
+  expect_refused(s, "episodes");
+  s = tiny();
+  s.worlds.clear();
+  expect_refused(s, "worlds");
+  s = tiny();
+  s.target_speeds = {1.0, -1.0};
+  expect_refused(s, "target_speeds");
+  s = tiny();
+  s.duration = 0.0;
+  expect_refused(s, "duration");
+  s = tiny();
+  s.label_every = 0;
+  expect_refused(s, "label_every");
+  s = tiny();
+  s.jobs = 0;
+  expect_refused(s, "jobs");
+  s = tiny();
+  s.expert.samples = 2;
+  expect_refused(s, "expert.samples");
+  s = tiny();
+  s.expert.cem_iterations = 0;
+  expect_refused(s, "expert.cem_iterations");
+  s = tiny();
+  s.expert.perception.nearest_count = 30;
+  expect_refused(s, "expert.perception.nearest_count");
+  s = tiny();
+  s.driver = "projcem";
+  s.label_every = 20;  // 1 s between the expert's scans: its velocity tracks would never last
+  expect_refused(s, "label_every");
+  s = tiny();
+  s.driver = "no-such-planner";
+  try {
+    sim::generate_demonstrations(s);
+    ADD_FAILURE() << "unknown driver accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-planner"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Demonstrations, ReaderRefusesFilesThatBreakTheContractNamingFileAndTensor) {
+  sim::Demonstrations d;
+  d.rows = 2;
+  d.cloud_points = 3;
+  d.nearest_points = 2;
+  d.coefficients = 11;
+  d.observation.assign(12, 0.5f);
+  d.cloud.assign(12, 1.0f);
+  d.obstacles.assign(16, 0.0f);
+  d.expert_xi.assign(44, 0.25f);
+  d.expert_cost = {1.0f, 2.0f};
+  d.episode = {0, 0};
+  d.time = {0.0f, 0.05f};
+  sim::DemonstrationSettings s;
+  s.expert.perception.cloud_size = 3;
+  s.expert.perception.nearest_count = 2;
+  d.metadata = sim::demonstration_metadata(s);
+  const std::string path = temp_path("contract.safetensors");
+  sim::write_demonstrations(path, d);
+  EXPECT_EQ(sim::read_demonstrations(path).episode, d.episode);
+
+  const auto expect_refused = [&](const io::TensorFile& file, const std::string& what) {
+    io::write_safetensors(path, file);
+    try {
+      sim::read_demonstrations(path);
+      ADD_FAILURE() << "accepted a file with " << what;
+    } catch (const io::InputError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find(what), std::string::npos) << message;
+    }
+  };
+  io::TensorFile file = sim::to_tensor_file(d);
+  file.metadata["format"] = "occtrack.model.v1";
+  expect_refused(file, "format");
+  file = sim::to_tensor_file(d);
+  file.tensors.erase("cloud");
+  expect_refused(file, "cloud");
+  file = sim::to_tensor_file(d);
+  file.put("obstacles", {2, 3, 4}, std::vector<float>(24, 0.0f));  // 3 points, the metadata says 2
+  expect_refused(file, "obstacles");
+  file = sim::to_tensor_file(d);
+  file.put("episode", {2}, std::vector<float>{0.0f, 0.0f});
+  expect_refused(file, "episode");
+  file = sim::to_tensor_file(d);
+  file.put("expert_xi", {2, 20}, std::vector<float>(40, 0.0f));
+  expect_refused(file, "expert_xi");
+  file = sim::to_tensor_file(d);
+  file.metadata["rows"] = "3";
+  expect_refused(file, "observation");
+  file = sim::to_tensor_file(d);
+  file.metadata["perception"] = "{not json";
+  expect_refused(file, "perception");
+  file = sim::to_tensor_file(d);
+  file.put("expert_cost", {2}, std::vector<float>{1.0f, NAN});
+  expect_refused(file, "expert_cost");
+  std::filesystem::remove(path);
+
+  // Appending renumbers episodes and refuses other sizes.
+  sim::Demonstrations merged;
+  sim::append_demonstrations(merged, d);
+  sim::append_demonstrations(merged, d);
+  EXPECT_EQ(merged.rows, 4);
+  EXPECT_EQ(merged.episode, (std::vector<std::int32_t>{0, 0, 1, 1}));
+  EXPECT_EQ(merged.metadata.at("rows"), "4");
+  EXPECT_NO_THROW(sim::to_tensor_file(merged));
+  sim::Demonstrations other = d;
+  other.metadata["projection"] = "{}";
+  EXPECT_THROW(sim::append_demonstrations(merged, other), std::invalid_argument);
+}
