@@ -10,6 +10,7 @@ packages=(
   libcli11-dev                                   # command line
   libgtest-dev googletest libbenchmark-dev       # tests and benchmarks
   python3                                        # the command-line tests edit JSON files with it
+  libtorch-dev libopenblas0-pthread              # training (src/learning); OpenBLAS: ~20x faster than reference BLAS
 )
 
 missing=()

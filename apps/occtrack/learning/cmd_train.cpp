@@ -1,0 +1,191 @@
+// occtrack train --data FILE [--data FILE ...] --out MODEL.safetensors [--variant cvae|bc|fixed-q]
+//                [--steps N] [--batch B] [--lr LR] [--beta BETA] [--iterations K] [--device cpu|cuda]
+//                [--threads T] [--seed S] [--checkpoint FILE] [--checkpoint-every N] [--resume FILE]
+//                [--hidden H] [--layers L] [--features F] [--pointnet-hidden HP] [--pointnet-widths W,...]
+//                [--latent Z] [--dropout P] [--validation-share S] [--validation-every N] [--plain-projection]
+//
+// Trains the policy end to end through the unrolled projection (shared/spec/policy.md, docs/learning.md) and
+// writes the model file. Progress (step, loss terms, steps/s, ETA) goes to standard error every few
+// seconds; the summary to standard output.
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "../commands.hpp"
+#include "allocation.hpp"
+#include "learning/dataset.hpp"
+#include "learning/export.hpp"
+#include "learning/trainer.hpp"
+
+namespace occtrack::app {
+
+namespace {
+
+struct TrainOptions {
+  std::vector<std::string> data;
+  std::string out;
+  std::string variant = "cvae";
+  std::string resume;
+  int threads = 0;
+  learning::TrainingSettings settings;
+};
+
+std::string duration_text(double seconds) {
+  const long s = static_cast<long>(seconds + 0.5);
+  char buffer[32];
+  if (s >= 3600)
+    std::snprintf(buffer, sizeof buffer, "%ldh%02ldm", s / 3600, (s / 60) % 60);
+  else if (s >= 60)
+    std::snprintf(buffer, sizeof buffer, "%ldm%02lds", s / 60, s % 60);
+  else
+    std::snprintf(buffer, sizeof buffer, "%lds", s);
+  return buffer;
+}
+
+std::string loss_text(const learning::LossTerms& l) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "loss %.5g (mse %.4g, kl %.4g, residual %.4g)", l.total, l.mse, l.kl,
+                l.residual);
+  return buffer;
+}
+
+// The command as it could be typed again, for the model's created_by.
+std::string canonical_command(const TrainOptions& o) {
+  const auto& s = o.settings;
+  std::ostringstream c;
+  c << "occtrack train";
+  for (const auto& d : o.data) c << " --data " << d;
+  c << " --out " << o.out << " --variant " << o.variant << " --steps " << s.steps << " --batch " << s.batch
+    << " --lr " << s.learning_rate << " --beta " << s.beta << " --iterations " << s.iterations << " --device "
+    << s.device << " --seed " << s.seed << " --hidden " << s.network.hidden << " --layers " << s.network.layers
+    << " --features " << s.network.features << " --pointnet-hidden " << s.network.pointnet_hidden
+    << " --pointnet-widths ";
+  for (std::size_t i = 0; i < s.network.pointnet_widths.size(); ++i)
+    c << (i ? "," : "") << s.network.pointnet_widths[i];
+  c << " --latent " << s.network.latent << " --dropout " << s.network.dropout;
+  if (s.plain_projection) c << " --plain-projection";
+  if (!o.resume.empty()) c << " --resume " << o.resume;
+  return c.str();
+}
+
+int run(TrainOptions o) {
+  const char* who = "occtrack train: ";
+  keep_large_allocations();
+  o.settings.variant = learning::parse_variant(o.variant);
+  if (o.threads > 0) torch::set_num_threads(o.threads);
+  if (o.settings.checkpoint_path.empty() && !o.resume.empty()) o.settings.checkpoint_path = o.resume;
+
+  learning::Dataset data = learning::load_dataset(o.data);
+  std::fprintf(stderr, "%sloaded %lld rows from %zu file(s): cloud %lld points, %lld obstacle points, n = %d, m = %d\n",
+               who, static_cast<long long>(data.rows()), data.files.size(), static_cast<long long>(data.cloud_points()),
+               static_cast<long long>(data.nearest_points()), data.coefficients(), data.projection.steps);
+  learning::Trainer trainer(o.settings, std::move(data));
+  std::fprintf(stderr, "%s%s on %s, %lld training rows (%lld episodes), %lld validation rows (%lld episodes), "
+               "K = %d (%s projection backward)\n",
+               who, learning::to_string(o.settings.variant), learning::hardware_description(trainer.device()).c_str(),
+               static_cast<long long>(trainer.split().train.numel()),
+               static_cast<long long>(trainer.split().train_episodes),
+               static_cast<long long>(trainer.split().validation.numel()),
+               static_cast<long long>(trainer.split().validation_episodes), o.settings.iterations,
+               o.settings.plain_projection ? "plain" : "fast");
+  if (!o.resume.empty()) {
+    trainer.load_checkpoint(o.resume);
+    std::fprintf(stderr, "%sresumed from %s at step %lld\n", who, o.resume.c_str(),
+                 static_cast<long long>(trainer.current_step()));
+  }
+
+  const learning::TrainingSummary summary = trainer.run([&](const learning::TrainingProgress& p) {
+    std::string line = "step " + std::to_string(p.step) + "/" + std::to_string(p.steps) + "  " + loss_text(p.loss);
+    char rate[96];
+    std::snprintf(rate, sizeof rate, "  %.2f steps/s  elapsed %s  ETA %s", p.steps_per_second,
+                  duration_text(p.elapsed_seconds).c_str(), duration_text(p.eta_seconds).c_str());
+    line += rate;
+    if (p.validation) line += "  | validation " + loss_text(*p.validation);
+    if (!p.checkpoint.empty()) line += "  | checkpoint " + p.checkpoint;
+    std::fprintf(stderr, "%s\n", line.c_str());
+    std::fflush(stderr);
+  });
+
+  std::string created_by = "occtrack";
+#ifdef OCCTRACK_VERSION
+  created_by += " " OCCTRACK_VERSION;
+#endif
+  created_by += ": " + canonical_command(o);
+  learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by));
+  std::printf("trained %s for %lld steps in %s: final %s\n", learning::to_string(o.settings.variant),
+              static_cast<long long>(summary.steps), duration_text(summary.seconds).c_str(),
+              loss_text(summary.final_loss).c_str());
+  if (summary.validation) std::printf("  validation %s\n", loss_text(*summary.validation).c_str());
+  std::printf("  model %s\n", o.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_train_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<TrainOptions>();
+  auto& s = o->settings;
+  CLI::App* cmd = app.add_subcommand("train", "Train the learned policy end to end through the projection");
+  cmd->add_option("--data", o->data, "Dataset file (occtrack.dataset.v1); repeat for several")->required();
+  cmd->add_option("--out", o->out, "Model file to write (occtrack.model.v1 safetensors)")->required();
+  cmd->add_option("--variant", o->variant, "cvae, bc (no projection) or fixed-q (nominal q)")
+      ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
+      ->capture_default_str();
+  cmd->add_option("--steps", s.steps, "Optimisation steps in all (a resumed run continues up to this)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 40))
+      ->capture_default_str();
+  cmd->add_option("--batch", s.batch, "Rows per mini-batch")->check(CLI::Range(int64_t{1}, int64_t{1} << 24))->capture_default_str();
+  cmd->add_option("--lr", s.learning_rate, "Adam learning rate")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--beta", s.beta, "KL weight after the warm-up")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--kl-warmup", s.kl_warmup_steps, "Steps over which the KL weight ramps up to beta")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--iterations", s.iterations, "K, unrolled projection iterations in training")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_flag("--plain-projection", s.plain_projection,
+                "Differentiate through the plain torch loop (autograd) instead of the hand-written backward");
+  cmd->add_option("--device", s.device, "cpu, cuda or cuda:I")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "CPU threads for torch (0: torch's default)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  cmd->add_option("--seed", s.seed, "Seed of the weights, batches, latent noise and dropout")->capture_default_str();
+  cmd->add_option("--checkpoint", s.checkpoint_path, "Checkpoint file (model and optimizer), written periodically");
+  cmd->add_option("--checkpoint-every", s.checkpoint_every, "Steps between checkpoints")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--resume", o->resume,
+                  "Continue from this checkpoint (same data, variant, sizes, batch, seed and K); new checkpoints "
+                  "go to --checkpoint, or to this file");
+  cmd->add_option("--hidden", s.network.hidden, "H, encoder and decoder width")->check(CLI::Range(1, 1 << 16))->capture_default_str();
+  cmd->add_option("--layers", s.network.layers, "L, hidden layers of encoder and decoder")->check(CLI::Range(1, 64))->capture_default_str();
+  cmd->add_option("--features", s.network.features, "F, PointNet output features")->check(CLI::Range(1, 1 << 16))->capture_default_str();
+  cmd->add_option("--pointnet-hidden", s.network.pointnet_hidden, "H_p, PointNet fully connected width")
+      ->check(CLI::Range(1, 1 << 16))
+      ->capture_default_str();
+  cmd->add_option("--pointnet-widths", s.network.pointnet_widths, "PointNet per-point widths (the last is E)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1 << 16))
+      ->capture_default_str();
+  cmd->add_option("--latent", s.network.latent, "Z, latent size")->check(CLI::Range(1, 1024))->capture_default_str();
+  cmd->add_option("--dropout", s.network.dropout, "PointNet dropout probability")->check(CLI::Range(0.0, 0.99))->capture_default_str();
+  cmd->add_option("--validation-share", s.validation_share, "Share of the episodes held out for validation")
+      ->check(CLI::Range(0.0, 0.9))
+      ->capture_default_str();
+  cmd->add_option("--validation-every", s.validation_every, "Steps between validation losses (0: at the end only)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--progress-seconds", s.progress_seconds, "Seconds between progress lines")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->callback([o, &exit_code]() {
+    try {
+      exit_code = run(*o);
+    } catch (const std::exception& e) {
+      std::cerr << "occtrack train: " << e.what() << "\n";
+      exit_code = kExitInputError;
+    }
+  });
+}
+
+}  // namespace occtrack::app

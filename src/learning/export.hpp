@@ -1,0 +1,62 @@
+// The model file (docs/learning.md, "Model file"): safetensors, format "occtrack.model.v1", every tensor of
+// the model in float32 on the CPU under its docs/learning.md name, and the metadata the run-time policy
+// checks (variant, network, projection, band) plus the training's provenance.
+//
+//   learning::export_model("model.safetensors", trainer.model(), trainer.model_metadata(summary, created_by));
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "learning/networks.hpp"
+#include "learning/trainer.hpp"
+#include "occtrack/core/tracking.hpp"
+#include "occtrack/io/safetensors.hpp"
+#include "occtrack/projection/settings.hpp"
+
+namespace occtrack::learning {
+
+inline constexpr const char* kModelFormat = "occtrack.model.v1";
+
+/// Where a model came from (the `training` metadata JSON).
+struct TrainingRecord {
+  struct File {
+    std::string path;
+    int64_t rows = 0;
+  };
+  std::vector<File> datasets;
+  int64_t train_rows = 0, validation_rows = 0;
+  std::uint64_t seed = 0;
+  int64_t steps = 0, batch = 0, kl_warmup_steps = 0;
+  double learning_rate = 0, beta = 0, dropout = 0;
+  int iterations = 0;           ///< K in training
+  bool plain_projection = false;
+  std::string device, hardware;
+  double seconds = 0;
+  LossTerms final_loss;
+  std::optional<LossTerms> validation;
+};
+
+struct ModelMetadata {
+  Variant variant = Variant::cvae;
+  NetworkConfig network;
+  projection::Settings projection;  ///< iterations = the training iteration count
+  core::TrackingBand band;
+  TrainingRecord training;
+  std::string created_by;           ///< occtrack version and command line
+};
+
+/// The `training` metadata as JSON text.
+std::string training_json(const TrainingRecord& record);
+/// The `band` metadata as JSON text: {"min", "reference", "max"}.
+std::string band_json(const core::TrackingBand& band);
+
+/// The file's contents: metadata (format, variant, network, projection, band, training, created_by) and
+/// every tensor of named_model_tensors() as float32.
+io::TensorFile model_file(CvaeImpl& model, const ModelMetadata& metadata);
+/// Writes model_file() to `path` (io::InputError when it cannot be written).
+void export_model(const std::string& path, CvaeImpl& model, const ModelMetadata& metadata);
+
+}  // namespace occtrack::learning

@@ -1,0 +1,357 @@
+#include "learning/networks.hpp"
+
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "occtrack/core/bernstein.hpp"
+
+namespace occtrack::learning {
+
+namespace nn = torch::nn;
+using torch::indexing::Slice;
+
+const char* to_string(Variant variant) {
+  switch (variant) {
+    case Variant::cvae: return "cvae";
+    case Variant::bc: return "bc";
+    case Variant::fixed_q: return "fixed-q";
+  }
+  return "?";
+}
+
+Variant parse_variant(const std::string& text) {
+  if (text == "cvae") return Variant::cvae;
+  if (text == "bc") return Variant::bc;
+  if (text == "fixed-q") return Variant::fixed_q;
+  throw std::invalid_argument("unknown variant '" + text + "' (expected cvae, bc or fixed-q)");
+}
+
+bool NetworkConfig::validate(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error) *error = message;
+    return false;
+  };
+  auto positive = [&](int value, const char* name) {
+    return value > 0 ? true : fail(std::string(name) + " (" + std::to_string(value) + ") must be positive");
+  };
+  if (!positive(observation, "observation") || !positive(cloud_points, "cloud_points") ||
+      !positive(latent, "latent") || !positive(pointnet_hidden, "pointnet_hidden") ||
+      !positive(features, "features") || !positive(hidden, "hidden") || !positive(layers, "layers") ||
+      !positive(coefficients, "coefficients") || !positive(steps, "steps"))
+    return false;
+  if (nearest_points < 0) return fail("nearest_points (" + std::to_string(nearest_points) + ") must not be negative");
+  if (pointnet_widths.empty()) return fail("pointnet_widths must not be empty");
+  for (std::size_t i = 0; i < pointnet_widths.size(); ++i)
+    if (pointnet_widths[i] <= 0) return fail("pointnet_widths[" + std::to_string(i) + "] must be positive");
+  if (!(batch_norm_eps > 0)) return fail("batch_norm_eps must be positive");
+  if (!(dropout >= 0 && dropout < 1)) return fail("dropout (" + std::to_string(dropout) + ") must be in [0, 1)");
+  return true;
+}
+
+std::string network_json(const NetworkConfig& c) {
+  const nlohmann::json j = {{"observation", c.observation},
+                            {"cloud_points", c.cloud_points},
+                            {"nearest_points", c.nearest_points},
+                            {"latent", c.latent},
+                            {"pointnet_widths", c.pointnet_widths},
+                            {"pointnet_hidden", c.pointnet_hidden},
+                            {"features", c.features},
+                            {"hidden", c.hidden},
+                            {"layers", c.layers},
+                            {"outputs", c.outputs()},
+                            {"coefficients", c.coefficients},
+                            {"steps", c.steps},
+                            {"batch_norm_eps", c.batch_norm_eps}};
+  return j.dump();
+}
+
+NetworkConfig parse_network_json(const std::string& text) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("network: not JSON: ") + e.what());
+  }
+  auto get = [&](const char* key) -> const nlohmann::json& {
+    if (!j.is_object() || !j.contains(key)) throw std::invalid_argument(std::string("network: '") + key + "' is missing");
+    return j.at(key);
+  };
+  NetworkConfig c;
+  try {
+    c.observation = get("observation").get<int>();
+    c.cloud_points = get("cloud_points").get<int>();
+    c.nearest_points = get("nearest_points").get<int>();
+    c.latent = get("latent").get<int>();
+    c.pointnet_widths = get("pointnet_widths").get<std::vector<int>>();
+    c.pointnet_hidden = get("pointnet_hidden").get<int>();
+    c.features = get("features").get<int>();
+    c.hidden = get("hidden").get<int>();
+    c.layers = get("layers").get<int>();
+    c.coefficients = get("coefficients").get<int>();
+    c.steps = get("steps").get<int>();
+    c.batch_norm_eps = get("batch_norm_eps").get<double>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(std::string("network: ") + e.what());
+  }
+  if (j.contains("outputs") && j.at("outputs").get<int>() != c.outputs())
+    throw std::invalid_argument("network: 'outputs' is " + j.at("outputs").dump() + ", the sizes give " +
+                                std::to_string(c.outputs()));
+  std::string error;
+  if (!c.validate(&error)) throw std::invalid_argument("network: " + error);
+  return c;
+}
+
+OutputLayout::OutputLayout(const NetworkConfig& c) {
+  const int n2 = 2 * c.coefficients;
+  terminal = 0;
+  via = 4;
+  lambda0 = 8;
+  distance_min = lambda0 + n2;
+  distance_max = distance_min + c.steps;
+  xi_bar = distance_max + c.steps;
+  size = xi_bar + n2;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+StandardizerImpl::StandardizerImpl(int size) {
+  mean = register_buffer("mean", torch::zeros({size}));
+  std = register_buffer("std", torch::ones({size}));
+}
+
+torch::Tensor StandardizerImpl::forward(const torch::Tensor& x) { return (x - mean) / std; }
+
+OutputScalingImpl::OutputScalingImpl(int size) {
+  offset = register_buffer("offset", torch::zeros({size}));
+  scale = register_buffer("scale", torch::ones({size}));
+}
+
+torch::Tensor OutputScalingImpl::forward(const torch::Tensor& raw) { return raw * scale + offset; }
+
+NormalizationImpl::NormalizationImpl(const NetworkConfig& c) {
+  observation = register_module("observation", Standardizer(c.observation));
+  cloud = register_module("cloud", Standardizer(2));
+  xi = register_module("xi", Standardizer(2 * c.coefficients));
+  output = register_module("output", OutputScaling(c.outputs()));
+}
+
+namespace {
+
+void copy_checked(torch::Tensor& buffer, const torch::Tensor& value, const char* name) {
+  if (!value.defined() || value.numel() != buffer.numel())
+    throw std::invalid_argument(std::string("normalisation: ") + name + " must have " +
+                                std::to_string(buffer.numel()) + " values, got " +
+                                (value.defined() ? std::to_string(value.numel()) : std::string("none")));
+  torch::NoGradGuard no_grad;
+  buffer.copy_(value.reshape(buffer.sizes()).to(buffer.options()));
+}
+
+}  // namespace
+
+void NormalizationImpl::set(const NormalizationStats& s) {
+  copy_checked(observation->mean, s.observation_mean, "observation mean");
+  copy_checked(observation->std, s.observation_std, "observation std");
+  copy_checked(cloud->mean, s.cloud_mean, "cloud mean");
+  copy_checked(cloud->std, s.cloud_std, "cloud std");
+  copy_checked(xi->mean, s.xi_mean, "xi mean");
+  copy_checked(xi->std, s.xi_std, "xi std");
+  copy_checked(output->offset, s.output_offset, "output offset");
+  copy_checked(output->scale, s.output_scale, "output scale");
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+namespace {
+
+nn::BatchNorm1d batch_norm(int features, const NetworkConfig& c) {
+  return nn::BatchNorm1d(nn::BatchNorm1dOptions(features).eps(c.batch_norm_eps));
+}
+
+// Batch norm over every leading dimension (batch and points): statistics per channel, the last dimension.
+torch::Tensor per_point(nn::BatchNorm1d& bn, const torch::Tensor& x) {
+  const auto sizes = x.sizes().vec();
+  return bn->forward(x.reshape({-1, sizes.back()})).reshape(sizes);
+}
+
+}  // namespace
+
+PointNetImpl::PointNetImpl(const NetworkConfig& c) {
+  int input = 2;
+  for (std::size_t i = 0; i < c.pointnet_widths.size(); ++i) {
+    const int width = c.pointnet_widths[i];
+    conv_.push_back(register_module("conv" + std::to_string(i), nn::Linear(input, width)));
+    bn_.push_back(register_module("bn" + std::to_string(i), batch_norm(width, c)));
+    input = width;
+  }
+  fc0_ = register_module("fc0", nn::Linear(input, c.pointnet_hidden));
+  fc_bn0_ = register_module("fc_bn0", batch_norm(c.pointnet_hidden, c));
+  dropout_ = register_module("dropout", nn::Dropout(c.dropout));
+  fc1_ = register_module("fc1", nn::Linear(c.pointnet_hidden, c.features));
+}
+
+torch::Tensor PointNetImpl::pooled(const torch::Tensor& cloud) {
+  torch::Tensor x = cloud;
+  for (std::size_t i = 0; i < conv_.size(); ++i) x = torch::relu(per_point(bn_[i], conv_[i]->forward(x)));
+  return std::get<0>(x.max(/*dim=*/-2));
+}
+
+torch::Tensor PointNetImpl::forward(const torch::Tensor& cloud) {
+  const torch::Tensor h = dropout_->forward(torch::relu(fc_bn0_->forward(fc0_->forward(pooled(cloud)))));
+  return fc1_->forward(h);
+}
+
+MlpTrunk::MlpTrunk(nn::Module& owner, int input, const NetworkConfig& c) {
+  for (int i = 0; i < c.layers; ++i) {
+    fc_.push_back(owner.register_module("fc" + std::to_string(i), nn::Linear(input, c.hidden)));
+    bn_.push_back(owner.register_module("bn" + std::to_string(i), batch_norm(c.hidden, c)));
+    input = c.hidden;
+  }
+}
+
+torch::Tensor MlpTrunk::forward(torch::Tensor x) {
+  for (std::size_t i = 0; i < fc_.size(); ++i) x = torch::relu(bn_[i]->forward(fc_[i]->forward(x)));
+  return x;
+}
+
+EncoderImpl::EncoderImpl(const NetworkConfig& c) : trunk_(*this, c.observation + c.features + 2 * c.coefficients, c) {
+  mean_ = register_module("mean", nn::Linear(c.hidden, c.latent));
+  std_ = register_module("std", nn::Linear(c.hidden, c.latent));
+}
+
+Posterior EncoderImpl::forward(const torch::Tensor& observation, const torch::Tensor& features,
+                               const torch::Tensor& xi) {
+  const torch::Tensor x = trunk_.forward(torch::cat({observation, features, xi}, 1));
+  return {mean_->forward(x), torch::nn::functional::softplus(std_->forward(x)) + 1e-4};
+}
+
+DecoderImpl::DecoderImpl(const NetworkConfig& c) : trunk_(*this, c.latent + c.observation + c.features, c) {
+  out_ = register_module("out", nn::Linear(c.hidden, c.outputs()));
+  // Start near the output offsets (the training set's means): a small last layer.
+  torch::NoGradGuard no_grad;
+  out_->weight.mul_(0.1);
+  out_->bias.zero_();
+}
+
+torch::Tensor DecoderImpl::forward(const torch::Tensor& z, const torch::Tensor& observation,
+                                   const torch::Tensor& features) {
+  return out_->forward(trunk_.forward(torch::cat({z, observation, features}, 1)));
+}
+
+CvaeImpl::CvaeImpl(const NetworkConfig& config) : config_(config) {
+  std::string error;
+  if (!config.validate(&error)) throw std::invalid_argument("network: " + error);
+  norm = register_module("norm", Normalization(config));
+  pointnet = register_module("pointnet", PointNet(config));
+  encoder = register_module("encoder", Encoder(config));
+  decoder = register_module("decoder", Decoder(config));
+}
+
+torch::Tensor CvaeImpl::features(const torch::Tensor& cloud) { return pointnet->forward(norm->cloud->forward(cloud)); }
+
+Posterior CvaeImpl::encode(const torch::Tensor& observation, const torch::Tensor& features,
+                           const torch::Tensor& expert_xi) {
+  return encoder->forward(norm->observation->forward(observation), features, norm->xi->forward(expert_xi));
+}
+
+torch::Tensor CvaeImpl::decode(const torch::Tensor& z, const torch::Tensor& observation,
+                               const torch::Tensor& features) {
+  return norm->output->forward(decoder->forward(z, norm->observation->forward(observation), features));
+}
+
+CvaeForward CvaeImpl::forward(const torch::Tensor& observation, const torch::Tensor& cloud,
+                              const torch::Tensor& expert_xi) {
+  const torch::Tensor f = features(cloud);
+  Posterior q = encode(observation, f, expert_xi);
+  const torch::Tensor z = q.mean + q.sigma * torch::randn_like(q.sigma);
+  return {decode(z, observation, f), std::move(q)};
+}
+
+std::vector<std::pair<std::string, torch::Tensor>> named_model_tensors(CvaeImpl& model) {
+  std::vector<std::pair<std::string, torch::Tensor>> out;
+  for (const auto& p : model.named_parameters(/*recurse=*/true)) out.emplace_back(p.key(), p.value());
+  for (const auto& b : model.named_buffers(/*recurse=*/true)) {
+    const std::string& name = b.key();
+    const std::string suffix = "num_batches_tracked";
+    if (name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) continue;
+    out.emplace_back(name, b.value());
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+DecodedOutputs split_outputs(const torch::Tensor& y, const NetworkConfig& c) {
+  const OutputLayout l(c);
+  if (y.dim() != 2 || y.size(1) != l.size)
+    throw std::invalid_argument("decoder outputs must be [B, " + std::to_string(l.size) + "]");
+  auto cols = [&](int begin, int end) { return y.index({Slice(), Slice(begin, end)}); };
+  return {cols(l.terminal, l.terminal + 4),      cols(l.via, l.via + 4),
+          cols(l.lambda0, l.distance_min),       cols(l.distance_min, l.distance_max),
+          cols(l.distance_max, l.xi_bar),        cols(l.xi_bar, l.size)};
+}
+
+DecodedOutputs post_process(const DecodedOutputs& d, double speed_max, double band_min) {
+  DecodedOutputs out = d;
+  out.terminal = torch::cat({d.terminal.index({Slice(), Slice(0, 2)}),
+                             d.terminal.index({Slice(), Slice(2, 4)}).clamp(-speed_max, speed_max)},
+                            1);
+  out.distance_min = d.distance_min.clamp_min(band_min);
+  return out;
+}
+
+TrajectoryBasis::TrajectoryBasis(const projection::Settings& s, torch::Dtype dtype, torch::Device device) {
+  const core::BernsteinBasis b = core::bernstein_basis(s.degree, s.steps, s.horizon);
+  auto to_tensor = [&](const Eigen::MatrixXd& m) {
+    torch::Tensor t = torch::empty({m.rows(), m.cols()}, torch::kFloat64);
+    auto a = t.accessor<double, 2>();
+    for (Eigen::Index i = 0; i < m.rows(); ++i)
+      for (Eigen::Index j = 0; j < m.cols(); ++j) a[i][j] = m(i, j);
+    return t.to(device, dtype);
+  };
+  P = to_tensor(b.P);
+  Pd = to_tensor(b.Pd);
+}
+
+torch::Tensor TrajectoryBasis::positions(const torch::Tensor& xi) const {
+  const int64_t n = P.size(1);
+  const torch::Tensor pt = P.t();
+  return torch::cat({torch::matmul(xi.index({Slice(), Slice(0, n)}), pt),
+                     torch::matmul(xi.index({Slice(), Slice(n, 2 * n)}), pt)},
+                    1);
+}
+
+ProjectionInputs policy_outputs(const torch::Tensor& outputs, const torch::Tensor& observation,
+                                const torch::Tensor& obstacles, const PolicySettings& settings,
+                                const TrajectoryBasis& basis, const NetworkConfig& config) {
+  const DecodedOutputs d =
+      post_process(split_outputs(outputs, config), settings.projection.speed_max, settings.band.min);
+  ProjectionInputs in;
+  in.robot_velocity = observation.index({Slice(), Slice(0, 2)});
+  in.target = observation.index({Slice(), Slice(2, 6)});
+  in.obstacles = obstacles;
+  in.via_points = d.via_points;
+  in.lambda0 = d.lambda0;
+  in.xi_bar = d.xi_bar;
+  if (settings.variant != Variant::fixed_q) {
+    in.terminal = d.terminal;
+    in.distance_min = d.distance_min;
+    in.distance_max = d.distance_max;
+    return in;
+  }
+  // Nominal q, as planners::detail::Context::fill_row: the terminal state of xi_bar, its speed capped.
+  const int64_t n = config.coefficients, m = config.steps;
+  const torch::Tensor cx = d.xi_bar.index({Slice(), Slice(0, n)}), cy = d.xi_bar.index({Slice(), Slice(n, 2 * n)});
+  const torch::Tensor p_end = basis.P[m - 1], pd_end = basis.Pd[m - 1];
+  const torch::Tensor position = torch::stack({torch::mv(cx, p_end), torch::mv(cy, p_end)}, 1);
+  torch::Tensor velocity = torch::stack({torch::mv(cx, pd_end), torch::mv(cy, pd_end)}, 1);
+  const torch::Tensor speed = velocity.norm(2, /*dim=*/{1}, /*keepdim=*/true);
+  const double speed_max = settings.projection.speed_max;
+  velocity = torch::where(speed > speed_max, velocity * (speed_max / speed.clamp_min(1e-12)), velocity);
+  in.terminal = torch::cat({position, velocity}, 1);
+  const auto batch = outputs.size(0);
+  in.distance_min = torch::full({batch, m}, settings.band.min, outputs.options());
+  in.distance_max = torch::full({batch, m}, settings.band.max, outputs.options());
+  return in;
+}
+
+}  // namespace occtrack::learning

@@ -1,0 +1,258 @@
+// The policy's networks in LibTorch (docs/learning.md, "Networks"): PointNet, the CVAE's encoder and decoder,
+// the normalisation buffers, the post-processing of the decoder's outputs, and the map from those outputs to
+// the projection's inputs for each variant.
+//
+// Module and buffer names are the model file's tensor names: CvaeImpl::named_parameters() and
+// named_buffers() (less batch norm's num_batches_tracked) give exactly "pointnet.conv0.weight", ...,
+// "norm.output.scale" of docs/learning.md, so that the export is a plain walk over them.
+//
+//   learning::NetworkConfig config;                 // defaults of docs/learning.md
+//   learning::Cvae model(config);
+//   model->set_normalization(stats);                // from learning::compute_normalization
+//   learning::CvaeForward f = model->forward(observation, cloud, expert_xi);  // training: z ~ q(z | ...)
+//   model->eval();                                                              // inference: z ~ N(0, I)
+//   torch::Tensor y = model->decode(z, observation, model->features(cloud));
+#pragma once
+
+#include <torch/torch.h>
+
+#include <string>
+#include <vector>
+
+#include "learning/projection.hpp"
+#include "occtrack/core/tracking.hpp"
+#include "occtrack/projection/settings.hpp"
+
+namespace occtrack::learning {
+
+/// The three policies trained on the same data (shared/spec/policy.md, "Variants").
+enum class Variant {
+  cvae,     ///< the decoder predicts xi_bar, lambda0, via points and q; the projection makes the plan feasible
+  bc,       ///< no projection: the decoder's xi_bar is the plan
+  fixed_q,  ///< as cvae, but q (terminal state, distance bounds) is nominal, as Proj-CEM sets it
+};
+
+/// "cvae", "bc", "fixed-q".
+const char* to_string(Variant variant);
+/// Inverse of to_string; throws std::invalid_argument naming the text and the accepted names.
+Variant parse_variant(const std::string& text);
+
+/// Network sizes (docs/learning.md, "Sizes"); every field is stored in the model file's `network` metadata.
+struct NetworkConfig {
+  int observation = 6;      ///< O: robot vx, vy; target x, y (relative); target vx, vy
+  int cloud_points = 200;   ///< C: points of the PointNet input
+  int nearest_points = 60;  ///< N: the optimizer's obstacle points
+  int latent = 2;           ///< Z
+  std::vector<int> pointnet_widths = {64, 64, 64, 128, 256};  ///< per-point layers; the last is E
+  int pointnet_hidden = 256;  ///< H_p
+  int features = 64;          ///< F
+  int hidden = 256;           ///< H: encoder and decoder width
+  int layers = 3;             ///< L: hidden layers of the encoder and of the decoder
+  int coefficients = 11;      ///< n: Bernstein coefficients per axis
+  int steps = 100;            ///< m: steps of the horizon
+  double batch_norm_eps = 1e-5;
+  double dropout = 0.3;       ///< PointNet's dropout probability (training only; not part of the file's network)
+
+  /// Y = 4 (terminal) + 4 (via) + 2n (lambda0) + m (d_min) + m (d_max) + 2n (xi_bar).
+  int outputs() const { return 8 + 4 * coefficients + 2 * steps; }
+  /// False, with *error naming the first broken field, when a size is not positive or dropout not in [0, 1).
+  bool validate(std::string* error = nullptr) const;
+  bool operator==(const NetworkConfig&) const = default;
+};
+
+/// The `network` metadata JSON of docs/learning.md (observation, cloud_points, ..., batch_norm_eps).
+std::string network_json(const NetworkConfig& config);
+/// Parses network_json's text; throws std::invalid_argument naming a missing or malformed field.
+NetworkConfig parse_network_json(const std::string& text);
+
+/// Column ranges of the decoder output (docs/learning.md: terminal, via, lambda0, d_min, d_max, xi_bar).
+struct OutputLayout {
+  int terminal = 0, via = 4, lambda0 = 8, distance_min = 0, distance_max = 0, xi_bar = 0, size = 0;
+  explicit OutputLayout(const NetworkConfig& config);
+};
+
+// ---------------------------------------------------------------------------------------------------------
+// Normalisation buffers ("norm.*"): statistics of the training set, stored in the model file.
+
+/// (x - mean) / std, per feature (the last dimension).
+class StandardizerImpl : public torch::nn::Module {
+ public:
+  explicit StandardizerImpl(int size);
+  torch::Tensor forward(const torch::Tensor& x);
+  torch::Tensor mean, std;
+};
+TORCH_MODULE(Standardizer);
+
+/// raw * scale + offset, per output.
+class OutputScalingImpl : public torch::nn::Module {
+ public:
+  explicit OutputScalingImpl(int size);
+  torch::Tensor forward(const torch::Tensor& raw);
+  torch::Tensor offset, scale;
+};
+TORCH_MODULE(OutputScaling);
+
+/// Statistics that set the normalisation; shapes O, 2, 2n, Y (float32 on any device).
+struct NormalizationStats {
+  torch::Tensor observation_mean, observation_std;
+  torch::Tensor cloud_mean, cloud_std;
+  torch::Tensor xi_mean, xi_std;
+  torch::Tensor output_offset, output_scale;
+};
+
+class NormalizationImpl : public torch::nn::Module {
+ public:
+  explicit NormalizationImpl(const NetworkConfig& config);
+  /// Copies the statistics into the buffers (checks their sizes; std::invalid_argument otherwise).
+  void set(const NormalizationStats& stats);
+  Standardizer observation{nullptr}, cloud{nullptr}, xi{nullptr};
+  OutputScaling output{nullptr};
+};
+TORCH_MODULE(Normalization);
+
+// ---------------------------------------------------------------------------------------------------------
+// The networks (docs/learning.md, "Networks, in eval mode"). Inputs are already normalised.
+
+/// Per-point shared layers (1x1 convolutions as Linear over the last dimension) with batch norm over batch
+/// and points, max pool over points, then fc0, batch norm, ReLU, dropout and fc1 to F features.
+class PointNetImpl : public torch::nn::Module {
+ public:
+  explicit PointNetImpl(const NetworkConfig& config);
+  /// cloud: [B, C, 2], normalised. Returns [B, F].
+  torch::Tensor forward(const torch::Tensor& cloud);
+  /// The per-point part alone, max-pooled: [B, E] (for tests against the Eigen policy).
+  torch::Tensor pooled(const torch::Tensor& cloud);
+
+ private:
+  std::vector<torch::nn::Linear> conv_;
+  std::vector<torch::nn::BatchNorm1d> bn_;
+  torch::nn::Linear fc0_{nullptr}, fc1_{nullptr};
+  torch::nn::BatchNorm1d fc_bn0_{nullptr};
+  torch::nn::Dropout dropout_{nullptr};
+};
+TORCH_MODULE(PointNet);
+
+/// L times relu(bn(fc x)); the building block of the encoder and the decoder (names fc{i}, bn{i}).
+class MlpTrunk {
+ public:
+  MlpTrunk() = default;
+  MlpTrunk(torch::nn::Module& owner, int input, const NetworkConfig& config);
+  torch::Tensor forward(torch::Tensor x);
+
+ private:
+  std::vector<torch::nn::Linear> fc_;
+  std::vector<torch::nn::BatchNorm1d> bn_;
+};
+
+struct Posterior {
+  torch::Tensor mean;   ///< mu, [B, Z]
+  torch::Tensor sigma;  ///< softplus(std x) + 1e-4, [B, Z]
+};
+
+/// q(z | observation, features, expert trajectory): input [obs_n, features, xi_n] (O + F + 2n).
+class EncoderImpl : public torch::nn::Module {
+ public:
+  explicit EncoderImpl(const NetworkConfig& config);
+  Posterior forward(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& xi);
+
+ private:
+  MlpTrunk trunk_;
+  torch::nn::Linear mean_{nullptr}, std_{nullptr};
+};
+TORCH_MODULE(Encoder);
+
+/// p(outputs | z, observation, features): input [z, obs_n, features] (Z + O + F); returns raw [B, Y].
+class DecoderImpl : public torch::nn::Module {
+ public:
+  explicit DecoderImpl(const NetworkConfig& config);
+  torch::Tensor forward(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& features);
+
+ private:
+  MlpTrunk trunk_;
+  torch::nn::Linear out_{nullptr};
+};
+TORCH_MODULE(Decoder);
+
+struct CvaeForward {
+  torch::Tensor outputs;  ///< decoder outputs y (scaled, before post-processing), [B, Y]
+  Posterior posterior;    ///< q(z | ...), for the KL term
+};
+
+/// The whole model: normalisation buffers, PointNet, encoder and decoder. Raw (unnormalised) inputs.
+class CvaeImpl : public torch::nn::Module {
+ public:
+  explicit CvaeImpl(const NetworkConfig& config);
+
+  void set_normalization(const NormalizationStats& stats) { norm->set(stats); }
+
+  /// PointNet features of raw clouds [B, C, 2] -> [B, F].
+  torch::Tensor features(const torch::Tensor& cloud);
+  /// q(z | observation, features, expert_xi) from raw observation [B, O] and expert_xi [B, 2n].
+  Posterior encode(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& expert_xi);
+  /// Decoder outputs y = raw * scale + offset, [B, Y], from z [B, Z] and raw observation [B, O].
+  torch::Tensor decode(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& features);
+  /// Training pass: z = mu + sigma * eps with eps ~ N(0, I) from torch's global generator.
+  CvaeForward forward(const torch::Tensor& observation, const torch::Tensor& cloud, const torch::Tensor& expert_xi);
+
+  const NetworkConfig& config() const { return config_; }
+
+  Normalization norm{nullptr};
+  PointNet pointnet{nullptr};
+  Encoder encoder{nullptr};
+  Decoder decoder{nullptr};
+
+ private:
+  NetworkConfig config_;
+};
+TORCH_MODULE(Cvae);
+
+/// The model's tensors by file name (docs/learning.md), parameters and buffers, without batch norm's
+/// num_batches_tracked. The tensors are the module's own (not copies).
+std::vector<std::pair<std::string, torch::Tensor>> named_model_tensors(CvaeImpl& model);
+
+// ---------------------------------------------------------------------------------------------------------
+// Post-processing and the projection's inputs (docs/learning.md, "Post-processing and the cycle").
+
+/// The decoder outputs split by the layout; each [B, ...].
+struct DecodedOutputs {
+  torch::Tensor terminal;      ///< [B, 4] x, y, vx, vy
+  torch::Tensor via_points;    ///< [B, 4] x1, y1, x2, y2
+  torch::Tensor lambda0;       ///< [B, 2n]
+  torch::Tensor distance_min;  ///< [B, m]
+  torch::Tensor distance_max;  ///< [B, m]
+  torch::Tensor xi_bar;        ///< [B, 2n]
+};
+
+DecodedOutputs split_outputs(const torch::Tensor& outputs, const NetworkConfig& config);
+/// Step 1: terminal velocities clamped to [-speed_max, speed_max] per axis; d_min floored at band_min.
+DecodedOutputs post_process(const DecodedOutputs& decoded, double speed_max, double band_min);
+
+/// The sampled Bernstein basis as tensors (core::bernstein_basis), for W xi and the nominal q.
+struct TrajectoryBasis {
+  torch::Tensor P, Pd;  ///< [m, n]
+  TrajectoryBasis() = default;
+  TrajectoryBasis(const projection::Settings& settings, torch::Dtype dtype, torch::Device device);
+  /// W xi: positions (x at the m steps, then y), [B, 2m], from coefficients [B, 2n].
+  torch::Tensor positions(const torch::Tensor& xi) const;
+};
+
+/// What the policy needs beyond the decoder outputs to build the projection's inputs.
+struct PolicySettings {
+  Variant variant = Variant::cvae;
+  projection::Settings projection;
+  core::TrackingBand band;
+};
+
+/// Maps decoder outputs y [B, Y] (post-processing included here) and the cycle's observation [B, O] and
+/// obstacles [B, N, 4] to the projection's inputs:
+/// - robot_velocity = observation[0:2], target = observation[2:6], obstacles as given;
+/// - cvae: terminal, via points, lambda0, d_min, d_max and xi_bar from the decoder;
+/// - fixed-q: q nominal as planners/context.cpp fill_row: terminal position and velocity read off xi_bar
+///   (velocity capped at speed_max in norm), d_min = band.min, d_max = band.max; via points and lambda0
+///   from the decoder;
+/// - bc: as cvae (the caller skips the projection; the plan is xi_bar).
+ProjectionInputs policy_outputs(const torch::Tensor& outputs, const torch::Tensor& observation,
+                                const torch::Tensor& obstacles, const PolicySettings& settings,
+                                const TrajectoryBasis& basis, const NetworkConfig& config);
+
+}  // namespace occtrack::learning

@@ -1,0 +1,378 @@
+#include "learning/trainer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cerrno>
+#include <cstring>
+#include <dirent.h>
+#include <unistd.h>
+#include <fstream>
+#include <stdexcept>
+
+#include "learning/export.hpp"
+
+namespace occtrack::learning {
+
+using torch::indexing::Slice;
+
+bool TrainingSettings::validate(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error) *error = message;
+    return false;
+  };
+  if (steps < 0) return fail("steps (" + std::to_string(steps) + ") must not be negative");
+  if (batch <= 0) return fail("batch (" + std::to_string(batch) + ") must be positive");
+  if (!(learning_rate > 0)) return fail("learning_rate must be positive");
+  if (!(beta >= 0)) return fail("beta must not be negative");
+  if (iterations <= 0) return fail("iterations (" + std::to_string(iterations) + ") must be positive");
+  if (!(validation_share >= 0 && validation_share < 1)) return fail("validation_share must be in [0, 1)");
+  if (validation_every < 0 || checkpoint_every < 0) return fail("validation_every and checkpoint_every must not be negative");
+  if (!(band.min > 0 && band.min <= band.max)) return fail("band: need 0 < min <= max");
+  std::string network_error;
+  if (!network.validate(&network_error)) return fail("network: " + network_error);
+  return true;
+}
+
+LossTerms& LossTerms::operator+=(const LossTerms& o) {
+  total += o.total;
+  mse += o.mse;
+  kl += o.kl;
+  residual += o.residual;
+  return *this;
+}
+
+LossTerms LossTerms::operator/(double d) const { return {total / d, mse / d, kl / d, residual / d}; }
+
+LossTerms LossTensors::values() const {
+  auto value = [](const torch::Tensor& t) { return t.defined() ? t.item<double>() : 0.0; };
+  return {value(total), value(mse), value(kl), value(residual)};
+}
+
+double kl_weight(double beta, int64_t step, int64_t warmup_steps) {
+  if (warmup_steps <= 0) return beta;
+  return beta * std::min(1.0, static_cast<double>(step) / static_cast<double>(warmup_steps));
+}
+
+LossContext::LossContext(Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
+                         const NetworkConfig& network_config, int iterations_, bool plain, torch::Device device)
+    : network(network_config), basis(projection, torch::kFloat32, device), iterations(iterations_),
+      plain_projection(plain) {
+  policy.variant = variant;
+  policy.projection = projection;
+  policy.projection.iterations = iterations_;
+  policy.projection.obstacles = network_config.nearest_points;
+  policy.band = band;
+  if (variant != Variant::bc)
+    constants = std::make_shared<ProjectionConstants>(policy.projection, torch::kFloat32, device);
+}
+
+LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& c, double beta_t) {
+  const CvaeForward f = model.forward(batch.observation, batch.cloud, batch.expert_xi);
+  const ProjectionInputs inputs =
+      policy_outputs(f.outputs, batch.observation, batch.obstacles, c.policy, c.basis, c.network);
+  LossTensors loss;
+  torch::Tensor plan;
+  if (c.policy.variant == Variant::bc) {
+    plan = inputs.xi_bar;
+    loss.residual = torch::zeros({}, plan.options());
+  } else {
+    const ProjectionOutputs out = c.plain_projection ? project_plain(*c.constants, inputs, c.iterations)
+                                                     : project_fast(*c.constants, inputs, c.iterations);
+    plan = out.xi;
+    loss.residual = out.residual.mean();
+  }
+  loss.mse = (c.basis.positions(plan) - c.basis.positions(batch.expert_xi)).pow(2).mean();
+  const Posterior& q = f.posterior;
+  loss.kl = (0.5 * (q.mean.pow(2) + q.sigma.pow(2) - 1.0 - 2.0 * q.sigma.log())).sum(1).mean();
+  loss.total = 0.5 * loss.mse + beta_t * loss.kl;
+  if (c.policy.variant != Variant::bc) loss.total = loss.total + 0.5 * loss.residual;
+  return loss;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+namespace {
+
+torch::Device parse_device(const std::string& text) {
+  torch::Device device(torch::kCPU);
+  try {
+    device = torch::Device(text);
+  } catch (const std::exception&) {
+    throw std::invalid_argument("device '" + text + "' is not cpu, cuda or cuda:I");
+  }
+  if (device.is_cuda() && !torch::cuda::is_available())
+    throw std::runtime_error("device '" + text + "': CUDA is not available (this LibTorch was built without it, or "
+                             "no GPU is visible)");
+  if (!device.is_cpu() && !device.is_cuda()) throw std::invalid_argument("device '" + text + "' is not cpu or cuda");
+  return device;
+}
+
+std::uint64_t mix(std::uint64_t a, std::uint64_t b) {  // splitmix64 of a combination
+  std::uint64_t z = a * 0x9E3779B97F4A7C15ull + b + 0x632BE59BD9B4E019ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// The fields a resumed run must share with the checkpoint: they change the loss trajectory.
+std::string resume_identity(const TrainingSettings& s, const Dataset& data) {
+  return std::string("variant=") + to_string(s.variant) + " network=" + network_json(s.network) +
+         " dropout=" + std::to_string(s.network.dropout) + " batch=" + std::to_string(s.batch) +
+         " seed=" + std::to_string(s.seed) + " iterations=" + std::to_string(s.iterations) +
+         " rows=" + std::to_string(data.rows()) + " projection=" + projection_json(data.projection);
+}
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+}  // namespace
+
+Trainer::Trainer(const TrainingSettings& settings, Dataset data)
+    : settings_(settings), data_(std::move(data)), device_(parse_device(settings.device)) {
+  settings_.network.cloud_points = static_cast<int>(data_.cloud_points());
+  settings_.network.nearest_points = static_cast<int>(data_.nearest_points());
+  settings_.network.coefficients = data_.coefficients();
+  settings_.network.steps = data_.projection.steps;
+  std::string error;
+  if (!settings_.validate(&error)) throw std::invalid_argument("training settings: " + error);
+
+  split_ = split_by_episode(data_, settings_.validation_share, settings_.seed);
+  if (split_.train.numel() == 0) throw std::invalid_argument("training settings: no training rows");
+  if (device_.is_cuda()) data_.to(device_);  // batches are gathered on the GPU
+
+  reseed(-1);  // the initial weights depend on the seed alone
+  model_ = Cvae(settings_.network);
+  model_->set_normalization(compute_normalization(data_, split_.train, settings_.network, settings_.band));
+  model_->to(device_);
+  optimizer_ = std::make_unique<torch::optim::Adam>(model_->parameters(),
+                                                    torch::optim::AdamOptions(settings_.learning_rate));
+  context_ = std::make_unique<LossContext>(settings_.variant, data_.projection, settings_.band, settings_.network,
+                                           settings_.iterations, settings_.plain_projection, device_);
+  sampler_ = std::make_unique<BatchSampler>(split_.train, settings_.batch, settings_.seed);
+}
+
+void Trainer::reseed(int64_t stream) const {
+  torch::manual_seed(mix(settings_.seed, static_cast<std::uint64_t>(stream)));
+}
+
+LossTerms Trainer::step() {
+  reseed(step_);
+  model_->train();
+  const Batch batch = data_.gather(sampler_->indices(step_), device_);
+  optimizer_->zero_grad();
+  const LossTensors loss = batch_loss(*model_, batch, *context_, kl_weight(settings_.beta, step_, settings_.kl_warmup_steps));
+  loss.total.backward();
+  optimizer_->step();
+  ++step_;
+  return loss.values();
+}
+
+std::optional<LossTerms> Trainer::validate() {
+  if (split_.validation.numel() == 0) return std::nullopt;
+  torch::NoGradGuard no_grad;
+  reseed(-2);
+  model_->eval();
+  const torch::Tensor rows = split_.validation.index({Slice(0, settings_.validation_rows)});
+  LossTerms sum;
+  const double beta_t = kl_weight(settings_.beta, step_, settings_.kl_warmup_steps);
+  for (int64_t begin = 0; begin < rows.numel(); begin += settings_.batch) {
+    const torch::Tensor chunk = rows.index({Slice(begin, begin + settings_.batch)});
+    const LossTerms terms = batch_loss(*model_, data_.gather(chunk, device_), *context_, beta_t).values();
+    sum += LossTerms{terms.total * chunk.numel(), terms.mse * chunk.numel(), terms.kl * chunk.numel(),
+                     terms.residual * chunk.numel()};
+  }
+  model_->train();
+  return sum / static_cast<double>(rows.numel());
+}
+
+TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>& progress) {
+  TrainingSummary summary;
+  const auto start = Clock::now();
+  const double elapsed_before = elapsed_seconds_;
+  auto report_time = Clock::now();
+  int64_t report_step = step_;
+  LossTerms report_sum;
+  TrainingProgress pending;
+  auto elapsed = [&] { return elapsed_before + seconds_since(start); };
+
+  while (step_ < settings_.steps) {
+    const LossTerms terms = step();
+    summary.history.push_back(terms);
+    report_sum += terms;
+    elapsed_seconds_ = elapsed();
+    const bool last = step_ == settings_.steps;
+    if ((settings_.validation_every > 0 && step_ % settings_.validation_every == 0) || last)
+      if (auto v = validate()) {
+        pending.validation = v;
+        if (last) summary.validation = v;
+      }
+    if (!settings_.checkpoint_path.empty() &&
+        ((settings_.checkpoint_every > 0 && step_ % settings_.checkpoint_every == 0) || last)) {
+      save_checkpoint(settings_.checkpoint_path);
+      pending.checkpoint = settings_.checkpoint_path;
+    }
+    const double since = seconds_since(report_time);
+    if (progress && (since >= settings_.progress_seconds || last)) {
+      const int64_t done = step_ - report_step;
+      pending.step = step_;
+      pending.steps = settings_.steps;
+      pending.loss = report_sum / static_cast<double>(std::max<int64_t>(1, done));
+      pending.steps_per_second = since > 0 ? done / since : 0;
+      pending.elapsed_seconds = elapsed_seconds_;
+      pending.eta_seconds = pending.steps_per_second > 0 ? (settings_.steps - step_) / pending.steps_per_second : 0;
+      progress(pending);
+      pending = {};
+      report_sum = {};
+      report_step = step_;
+      report_time = Clock::now();
+    }
+  }
+  summary.steps = step_;
+  summary.seconds = elapsed_seconds_;
+  const std::size_t tail = std::min<std::size_t>(100, summary.history.size());
+  for (std::size_t i = summary.history.size() - tail; i < summary.history.size(); ++i)
+    summary.final_loss += summary.history[i];
+  if (tail > 0) summary.final_loss = summary.final_loss / static_cast<double>(tail);
+  if (summary.history.empty()) summary.validation = validate();  // resumed at the end: nothing ran
+  return summary;
+}
+
+void Trainer::save_checkpoint(const std::string& path) const {
+  torch::serialize::OutputArchive archive;
+  torch::serialize::OutputArchive model_archive, optimizer_archive;
+  model_->save(model_archive);
+  optimizer_->save(optimizer_archive);
+  archive.write("model", model_archive);
+  archive.write("optimizer", optimizer_archive);
+  archive.write("step", c10::IValue(step_));
+  archive.write("elapsed_seconds", c10::IValue(elapsed_seconds_));
+  archive.write("identity", c10::IValue(resume_identity(settings_, data_)));
+  // Write beside and rename, so that an interrupted save leaves the previous checkpoint intact.
+  const std::string temporary = path + ".partial";
+  archive.save_to(temporary);
+  // (POSIX calls here and below rather than std::filesystem: LibTorch 2.x wheels export their own copies of
+  // std::filesystem's symbols, which can interpose libstdc++'s.)
+  if (std::rename(temporary.c_str(), path.c_str()) != 0)
+    throw std::runtime_error("checkpoint '" + path + "': " + std::strerror(errno));
+}
+
+void Trainer::load_checkpoint(const std::string& path) {
+  if (::access(path.c_str(), F_OK) != 0) throw std::runtime_error("checkpoint '" + path + "' does not exist");
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path, device_);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("checkpoint '" + path + "' cannot be read: " + e.what_without_backtrace());
+  }
+  c10::IValue identity, step, elapsed;
+  if (!archive.try_read("identity", identity) || !archive.try_read("step", step) ||
+      !archive.try_read("elapsed_seconds", elapsed))
+    throw std::runtime_error("checkpoint '" + path + "' is not an occtrack training checkpoint");
+  const std::string expected = resume_identity(settings_, data_);
+  const std::string& found = identity.toStringRef();
+  if (found != expected) {
+    // Name the first field that differs.
+    std::size_t i = 0;
+    while (i < found.size() && i < expected.size() && found[i] == expected[i]) ++i;
+    const std::size_t field = expected.rfind(' ', i) == std::string::npos ? 0 : expected.rfind(' ', i) + 1;
+    const std::string name = expected.substr(field, expected.find('=', field) - field);
+    throw std::runtime_error("checkpoint '" + path + "' was written with a different " + name + " (checkpoint: " +
+                             found.substr(field, found.find(' ', field) - field) + ", now: " +
+                             expected.substr(field, expected.find(' ', field) - field) + ")");
+  }
+  torch::serialize::InputArchive model_archive, optimizer_archive;
+  archive.read("model", model_archive);
+  archive.read("optimizer", optimizer_archive);
+  model_->load(model_archive);
+  optimizer_->load(optimizer_archive);
+  step_ = step.toInt();
+  elapsed_seconds_ = elapsed.toDouble();
+}
+
+ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std::string& created_by) const {
+  ModelMetadata m;
+  m.variant = settings_.variant;
+  m.network = settings_.network;
+  m.projection = data_.projection;
+  m.projection.iterations = settings_.iterations;
+  m.projection.obstacles = settings_.network.nearest_points;
+  m.band = settings_.band;
+  m.created_by = created_by;
+  TrainingRecord& t = m.training;
+  for (const auto& f : data_.files) t.datasets.push_back({f.path, f.rows});
+  t.train_rows = split_.train.numel();
+  t.validation_rows = split_.validation.numel();
+  t.seed = settings_.seed;
+  t.steps = summary.steps;
+  t.batch = sampler_->batch();
+  t.kl_warmup_steps = settings_.kl_warmup_steps;
+  t.learning_rate = settings_.learning_rate;
+  t.beta = settings_.beta;
+  t.dropout = settings_.network.dropout;
+  t.iterations = settings_.iterations;
+  t.plain_projection = settings_.plain_projection;
+  t.device = device_.str();
+  t.hardware = hardware_description(device_);
+  t.seconds = summary.seconds;
+  t.final_loss = summary.final_loss;
+  t.validation = summary.validation;
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+
+namespace {
+
+std::string trim(std::string s) {
+  const auto begin = s.find_first_not_of(" \t");
+  const auto end = s.find_last_not_of(" \t\r\n");
+  return begin == std::string::npos ? std::string() : s.substr(begin, end - begin + 1);
+}
+
+// The value of the first "key : value" line of a text file that starts with `key`.
+std::string field_of(const std::string& path, const std::string& key) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(key, 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) return trim(line.substr(colon + 1));
+    }
+  return {};
+}
+
+}  // namespace
+
+std::string hardware_description(torch::Device device) {
+  if (device.is_cuda()) {
+    // The driver's own description, one folder per GPU (ordered by bus id, as CUDA orders them by default).
+    std::vector<std::string> folders;
+    const std::string root = "/proc/driver/nvidia/gpus";
+    if (DIR* d = ::opendir(root.c_str())) {
+      while (const dirent* e = ::readdir(d))
+        if (e->d_name[0] != '.') folders.push_back(root + "/" + e->d_name);
+      ::closedir(d);
+    }
+    std::sort(folders.begin(), folders.end());
+    const std::size_t index = device.has_index() ? static_cast<std::size_t>(device.index()) : 0;
+    if (index < folders.size()) {
+      const std::string model = field_of(folders[index] + "/information", "Model");
+      if (!model.empty()) return model;
+    }
+    if (FILE* pipe = popen("nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null", "r")) {
+      char buffer[256];
+      std::vector<std::string> names;
+      while (std::fgets(buffer, sizeof buffer, pipe)) names.push_back(trim(buffer));
+      pclose(pipe);
+      if (index < names.size() && !names[index].empty()) return names[index];
+    }
+    return "CUDA device " + std::to_string(index);
+  }
+  std::string model = field_of("/proc/cpuinfo", "model name");
+  if (model.empty()) model = "unknown CPU";
+  const int threads = torch::get_num_threads();
+  return model + " (" + std::to_string(threads) + (threads == 1 ? " thread)" : " threads)");
+}
+
+}  // namespace occtrack::learning

@@ -1,0 +1,159 @@
+// End-to-end training through the unrolled projection (shared/spec/policy.md, "Training"; docs/learning.md,
+// "Training"):
+//
+//   loss = 0.5 * MSE(W xi_K, tau_e) + beta_t * KL(N(mu, sigma) || N(0, I)) + 0.5 * mean(residual),
+//   beta_t = beta * min(1, step / 1000),
+//
+// with xi_K the projection's output after K iterations (K = 50 by default) started from the decoder's
+// outputs; BC uses the decoder's xi_bar for xi_K and has no residual term. Adam, CPU or CUDA.
+//
+//   learning::TrainingSettings settings;          // defaults; sizes C, N, n, m come from the data
+//   learning::Trainer trainer(settings, learning::load_dataset({"data.safetensors"}));
+//   learning::TrainingSummary summary = trainer.run([](const learning::TrainingProgress& p) { ... });
+//   learning::export_model("model.safetensors", trainer.model(), trainer.model_metadata(summary, "..."));
+//
+// Reproducibility: every step reseeds torch's generators from (seed, step), and the batch of a step depends
+// only on (seed, step), so a run resumed from a checkpoint repeats the loss trajectory of an uninterrupted
+// one (bit for bit on the CPU with a fixed thread count).
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "learning/dataset.hpp"
+#include "learning/networks.hpp"
+#include "learning/projection.hpp"
+
+namespace occtrack::learning {
+
+struct ModelMetadata;  // export.hpp
+
+struct TrainingSettings {
+  Variant variant = Variant::cvae;
+  /// Network sizes; cloud_points, nearest_points, coefficients and steps are overwritten from the data.
+  NetworkConfig network;
+  int64_t steps = 20000;         ///< optimisation steps in all (a resumed run continues up to this)
+  int64_t batch = 256;           ///< rows per mini-batch (cut to the training rows when there are fewer)
+  double learning_rate = 1e-3;   ///< Adam
+  double beta = 1e-3;            ///< KL weight after the warm-up
+  int64_t kl_warmup_steps = 1000;  ///< beta_t = beta * min(1, step / kl_warmup_steps)
+  int iterations = 50;           ///< K, unrolled projection iterations in training
+  bool plain_projection = false; ///< differentiate through the plain torch loop instead of project_fast
+  std::string device = "cpu";    ///< "cpu", "cuda" or "cuda:I"
+  std::uint64_t seed = 1;
+  core::TrackingBand band;       ///< d_min floor and fixed-q's nominal bounds
+  double validation_share = 0.1; ///< share of the episodes held out
+  int64_t validation_every = 1000;   ///< steps between validation losses (0: only at the end)
+  int64_t validation_rows = 2048;    ///< at most this many validation rows are evaluated
+  std::string checkpoint_path;       ///< empty: no checkpoints
+  int64_t checkpoint_every = 1000;   ///< steps between checkpoints (and one at the end)
+  double progress_seconds = 5.0;     ///< seconds between progress reports
+
+  /// False, with *error naming the first broken field, otherwise true.
+  bool validate(std::string* error = nullptr) const;
+};
+
+/// One batch's loss terms as numbers.
+struct LossTerms {
+  double total = 0, mse = 0, kl = 0, residual = 0;
+  LossTerms& operator+=(const LossTerms& o);
+  LossTerms operator/(double d) const;
+};
+
+/// The loss terms as tensors (total is the one to differentiate).
+struct LossTensors {
+  torch::Tensor total, mse, kl, residual;
+  LossTerms values() const;
+};
+
+/// beta_t = beta * min(1, step / warmup_steps) (warmup_steps <= 0: beta).
+double kl_weight(double beta, int64_t step, int64_t warmup_steps);
+
+/// What the loss needs besides the model and the batch; built once for a device.
+struct LossContext {
+  LossContext(Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
+              const NetworkConfig& network, int iterations, bool plain_projection, torch::Device device);
+  PolicySettings policy;
+  NetworkConfig network;
+  TrajectoryBasis basis;
+  std::shared_ptr<ProjectionConstants> constants;  ///< null for BC
+  int iterations = 50;
+  bool plain_projection = false;
+};
+
+/// The loss of one batch (docs/learning.md, "Training"); the model's mode (train/eval) is the caller's.
+LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& context, double beta_t);
+
+struct TrainingProgress {
+  int64_t step = 0, steps = 0;  ///< steps done, steps in all
+  LossTerms loss;               ///< mean over the steps since the last report
+  double steps_per_second = 0;  ///< over the steps since the last report
+  double elapsed_seconds = 0;   ///< this run's and the resumed runs' training time
+  double eta_seconds = 0;
+  std::optional<LossTerms> validation;  ///< set when a validation loss was computed since the last report
+  std::string checkpoint;               ///< set when a checkpoint was written since the last report
+};
+
+struct TrainingSummary {
+  int64_t steps = 0;
+  double seconds = 0;           ///< training time, resumed runs included
+  LossTerms final_loss;         ///< mean over the last (up to 100) steps
+  std::optional<LossTerms> validation;  ///< at the end, when there are validation rows
+  std::vector<LossTerms> history;       ///< every step of this run
+};
+
+class Trainer {
+ public:
+  /// Builds the model (sizes from the data), the normalisation from the training rows and the optimizer.
+  /// Throws std::invalid_argument on unusable settings, std::runtime_error when CUDA is asked for and absent.
+  Trainer(const TrainingSettings& settings, Dataset data);
+
+  /// One optimisation step at the current step index; returns its loss terms.
+  LossTerms step();
+  /// The loss on (up to validation_rows of) the validation rows, eval mode, no gradient; nullopt when there
+  /// are none. Reseeds torch's generators (the next step() reseeds them again).
+  std::optional<LossTerms> validate();
+  /// Steps until settings.steps, with progress reports, validation and checkpoints as set.
+  TrainingSummary run(const std::function<void(const TrainingProgress&)>& progress = {});
+
+  /// Model, optimizer, step, elapsed time and the settings that must not change on resume.
+  void save_checkpoint(const std::string& path) const;
+  /// Restores a checkpoint written with the same variant, network, batch, seed, iterations and data rows;
+  /// throws std::runtime_error naming the field that differs.
+  void load_checkpoint(const std::string& path);
+
+  int64_t current_step() const { return step_; }
+  double elapsed_seconds() const { return elapsed_seconds_; }
+  Cvae& model() { return model_; }
+  const TrainingSettings& settings() const { return settings_; }
+  const Dataset& data() const { return data_; }
+  const DatasetSplit& split() const { return split_; }
+  torch::Device device() const { return device_; }
+  /// The model file's metadata for this training (export.hpp).
+  ModelMetadata model_metadata(const TrainingSummary& summary, const std::string& created_by) const;
+
+ private:
+  void reseed(int64_t stream) const;
+
+  TrainingSettings settings_;
+  Dataset data_;
+  DatasetSplit split_;
+  torch::Device device_;
+  Cvae model_{nullptr};
+  std::unique_ptr<torch::optim::Adam> optimizer_;
+  std::unique_ptr<LossContext> context_;
+  std::unique_ptr<BatchSampler> sampler_;
+  int64_t step_ = 0;
+  double elapsed_seconds_ = 0;
+};
+
+/// "AMD EPYC 7B13 (1 thread)" from /proc/cpuinfo, or the CUDA device's name ("NVIDIA H100 80GB HBM3").
+std::string hardware_description(torch::Device device);
+
+}  // namespace occtrack::learning
