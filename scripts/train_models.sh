@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Reproduces the shipped models (models/*.safetensors): demonstrations labelled by the offline Proj-CEM
+# expert on generated worlds that share no seed with the benchmark suites, then the three variants of
+# shared/spec/policy.md trained end to end on them. The shipped models were made on a 16-core machine with
+# one H100 (see each model's metadata: `occtrack model info models/cvae.safetensors`).
+#
+# Usage: scripts/train_models.sh [DEVICE]      DEVICE: cuda (default) or cpu
+# Environment: JOBS (labelling threads, default: all cores), STEPS (training steps per variant),
+#              DATA (folder for the datasets, default build-data).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+device=${1:-cuda}
+jobs=${JOBS:-$(nproc)}
+steps=${STEPS:-6000}
+data=${DATA:-build-data}
+export OPENBLAS_NUM_THREADS=1
+mkdir -p "$data" models
+
+# 1. Demonstrations: 2 x 16 episodes of 20 s; online Proj-CEM drives, the expert (2000 samples, 4 CEM
+#    iterations, K = 50) labels every second cycle. About 6 minutes on 16 cores.
+half=$(( jobs > 1 ? jobs / 2 : 1 ))
+for part in a:5000 b:6000; do
+  name=${part%%:*}; seed=${part##*:}
+  [ -f "$data/demo-$name.safetensors" ] && continue
+  build/occtrack dataset generate --out "$data/demo-$name.safetensors" --episodes 16 --seed "$seed" \
+    --duration 20 --label-every 2 --driver projcem --jobs "$half" &
+done
+wait
+
+# 2. The three variants on the same data (run side by side; each is small next to the GPU).
+for variant in cvae bc fixed-q; do
+  build/occtrack train --data "$data/demo-a.safetensors" --data "$data/demo-b.safetensors" --variant "$variant" \
+    --steps "$steps" --device "$device" --seed 1 --out "models/$variant.safetensors" \
+    --checkpoint "$data/$variant.checkpoint" > "$data/train-$variant.log" 2>&1 &
+done
+wait
+tail -n 3 "$data"/train-*.log
