@@ -4,14 +4,16 @@
 # shared/spec/policy.md trained end to end on them. The shipped models were made on a 16-core machine with
 # one H100 (see each model's metadata: `occtrack model info models/cvae.safetensors`).
 #
-# Usage: scripts/train_models.sh [DEVICE]      DEVICE: cuda (default) or cpu
+# Usage: scripts/train_models.sh [DEVICE] [VARIANT...]   DEVICE: cpu (default) or cuda; VARIANT: cvae bc fixed-q
 # Environment: JOBS (labelling threads, default: all cores), STEPS (training steps per variant),
 #              DATA (folder for the datasets, default build-data).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-device=${1:-cuda}
+device=${1:-cpu}
+shift || true
+[ $# -gt 0 ] && variants=("$@") || variants=(cvae bc fixed-q)
 jobs=${JOBS:-$(nproc)}
-steps=${STEPS:-6000}
+steps=${STEPS:-1200}
 data=${DATA:-build-data}
 export OPENBLAS_NUM_THREADS=1
 mkdir -p "$data" models
@@ -27,10 +29,10 @@ for part in a:5000 b:6000; do
 done
 wait
 
-# 2. The three variants on the same data (run side by side; each is small next to the GPU).
-for variant in cvae bc fixed-q; do
+# 2. The variants on the same data, side by side (one thread each).
+for variant in "${variants[@]}"; do
   build/occtrack train --data "$data/demo-a.safetensors" --data "$data/demo-b.safetensors" --variant "$variant" \
-    --steps "$steps" --device "$device" --seed 1 --out "models/$variant.safetensors" \
+    --steps "$steps" --iterations 20 --threads 1 --device "$device" --seed 1 --out "models/$variant.safetensors" \
     --checkpoint "$data/$variant.checkpoint" > "$data/train-$variant.log" 2>&1 &
 done
 wait
