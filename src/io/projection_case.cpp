@@ -175,27 +175,32 @@ std::string projection_result_json(const projection::Result<T>& result, int inde
 template std::string projection_result_json<float>(const projection::Result<float>&, int);
 template std::string projection_result_json<double>(const projection::Result<double>&, int);
 
+std::string projection_settings_json(const projection::Settings& s) {
+  const json config = {{"degree", s.degree},
+                       {"steps", s.steps},
+                       {"horizon", s.horizon},
+                       {"iterations", s.iterations},
+                       {"obstacle_radius", s.obstacle_radius},
+                       {"speed_min", s.speed_min},
+                       {"speed_max", s.speed_max},
+                       {"accel_max", s.accel_max},
+                       {"via_steps", {s.via_step_1, s.via_step_2}},
+                       {"rho",
+                        {{"obstacle", s.rho.obstacle},
+                         {"velocity", s.rho.velocity},
+                         {"acceleration", s.rho.acceleration},
+                         {"tracking", s.rho.tracking},
+                         {"projection", s.rho.projection}}}};
+  return config.dump();
+}
+
 std::string projection_case_json(const ProjectionCase& c, int indent) {
   const auto& s = c.settings;
   json doc;
   doc["format"] = kProjectionCaseFormat;
   doc["name"] = c.name;
   doc["description"] = c.description;
-  doc["config"] = {{"degree", s.degree},
-                   {"steps", s.steps},
-                   {"horizon", s.horizon},
-                   {"iterations", s.iterations},
-                   {"obstacle_radius", s.obstacle_radius},
-                   {"speed_min", s.speed_min},
-                   {"speed_max", s.speed_max},
-                   {"accel_max", s.accel_max},
-                   {"via_steps", {s.via_step_1, s.via_step_2}},
-                   {"rho",
-                    {{"obstacle", s.rho.obstacle},
-                     {"velocity", s.rho.velocity},
-                     {"acceleration", s.rho.acceleration},
-                     {"tracking", s.rho.tracking},
-                     {"projection", s.rho.projection}}}};
+  doc["config"] = json::parse(projection_settings_json(s));
   const auto& p = c.problem;
   json obstacles = json::array();
   for (Eigen::Index b = 0; b < p.obstacles.rows(); ++b) {

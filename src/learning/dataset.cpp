@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "occtrack/io/error.hpp"
+#include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
 
 namespace occtrack::learning {
@@ -61,24 +62,7 @@ projection::Settings parse_projection_json(const std::string& text) {
   return s;
 }
 
-std::string projection_json(const projection::Settings& s) {
-  const nlohmann::json j = {{"degree", s.degree},
-                            {"steps", s.steps},
-                            {"horizon", s.horizon},
-                            {"iterations", s.iterations},
-                            {"obstacle_radius", s.obstacle_radius},
-                            {"speed_min", s.speed_min},
-                            {"speed_max", s.speed_max},
-                            {"accel_max", s.accel_max},
-                            {"via_steps", {s.via_step_1, s.via_step_2}},
-                            {"rho",
-                             {{"obstacle", s.rho.obstacle},
-                              {"velocity", s.rho.velocity},
-                              {"acceleration", s.rho.acceleration},
-                              {"tracking", s.rho.tracking},
-                              {"projection", s.rho.projection}}}};
-  return j.dump();
-}
+std::string projection_json(const projection::Settings& s) { return io::projection_settings_json(s); }
 
 // ---------------------------------------------------------------------------------------------------------
 // loading

@@ -9,6 +9,7 @@
 
 #include "../io/json_util.hpp"
 #include "gemm.hpp"
+#include "occtrack/io/projection_case.hpp"
 
 namespace occtrack::policy {
 
@@ -254,24 +255,7 @@ OutputLayout::OutputLayout(const NetworkConfig& network) {
   size = xi_bar + n2;
 }
 
-std::string projection_json(const projection::Settings& s) {
-  const json j = {{"degree", s.degree},
-                  {"steps", s.steps},
-                  {"horizon", s.horizon},
-                  {"iterations", s.iterations},
-                  {"obstacle_radius", s.obstacle_radius},
-                  {"speed_min", s.speed_min},
-                  {"speed_max", s.speed_max},
-                  {"accel_max", s.accel_max},
-                  {"via_steps", {s.via_step_1, s.via_step_2}},
-                  {"rho",
-                   {{"obstacle", s.rho.obstacle},
-                    {"velocity", s.rho.velocity},
-                    {"acceleration", s.rho.acceleration},
-                    {"tracking", s.rho.tracking},
-                    {"projection", s.rho.projection}}}};
-  return j.dump();
-}
+std::string projection_json(const projection::Settings& s) { return io::projection_settings_json(s); }
 
 projection::Settings parse_projection_json(const std::string& json_text, const std::string& source) {
   const JsonReader r(source);

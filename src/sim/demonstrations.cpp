@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "occtrack/io/error.hpp"
+#include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
@@ -271,23 +272,7 @@ bool DemonstrationRecorder::record(const planners::PlannerInput& input, const pl
 
 namespace {
 
-json projection_json(const projection::Settings& p) {
-  return json{{"degree", p.degree},
-              {"steps", p.steps},
-              {"horizon", p.horizon},
-              {"iterations", p.iterations},
-              {"obstacle_radius", p.obstacle_radius},
-              {"speed_min", p.speed_min},
-              {"speed_max", p.speed_max},
-              {"accel_max", p.accel_max},
-              {"via_steps", {p.via_step_1, p.via_step_2}},
-              {"rho",
-               {{"obstacle", p.rho.obstacle},
-                {"velocity", p.rho.velocity},
-                {"acceleration", p.rho.acceleration},
-                {"tracking", p.rho.tracking},
-                {"projection", p.rho.projection}}}};
-}
+json projection_json(const projection::Settings& p) { return json::parse(io::projection_settings_json(p)); }
 
 json perception_json(const perception::Settings& p) {
   return json{{"voxel_size", p.voxel_size},

@@ -41,4 +41,9 @@ std::string projection_result_json(const projection::Result<T>& result, int inde
 /// Writes a case file (inputs and, when given, expected outputs); used to ship example problems.
 std::string projection_case_json(const ProjectionCase& c, int indent = -1);
 
+/// The projection settings as the case files' "config" object: degree, steps, horizon, iterations,
+/// obstacle_radius, speed_min, speed_max, accel_max, via_steps [s1, s2], rho {...}. Datasets and models store
+/// the same object in their "projection" metadata.
+std::string projection_settings_json(const projection::Settings& settings);
+
 }  // namespace occtrack::io
