@@ -1,40 +1,71 @@
 #!/usr/bin/env bash
 # Reproduces the shipped models (models/*.safetensors): demonstrations labelled by the offline Proj-CEM
 # expert on generated worlds that share no seed with the benchmark suites, then the three variants of
-# shared/spec/policy.md trained end to end on them. The shipped models/cvae.safetensors was made this way:
-# the datasets on a 16-core CPU (about 6 minutes), the training on one thread of the 2-core dev machine
-# (1200 steps, K = 20, 35 minutes). The model file's metadata records the exact command and the data.
+# shared/spec/policy.md trained end to end on them, side by side. The model files' metadata records the exact
+# training command, the datasets and their row counts, the steps, the time and the hardware.
 #
-# Usage: scripts/train_models.sh [DEVICE] [VARIANT...]   DEVICE: cpu (default) or cuda; VARIANT: cvae bc fixed-q
-# Environment: JOBS (labelling threads, default: all cores), STEPS (training steps per variant),
-#              DATA (folder for the datasets, default build-data).
+# Usage: scripts/train_models.sh [DEVICE] [VARIANT...]   DEVICE: cpu (default), cuda or cuda:I;
+#                                                        VARIANT: cvae bc fixed-q (default: all three)
+# Environment (defaults in brackets):
+#   OCCTRACK        the occtrack binary, built with LibTorch [build/occtrack]
+#   DATA            folder for datasets, checkpoints and logs [build-data]
+#   MODELS          folder the model files are written to [models]
+#   CHUNKS          dataset files of 16 episodes each [8]; one that exists is kept, not made again
+#   DATA_MINUTES    start no new chunk after this many minutes (0: no limit) [0]
+#   DURATION        simulated seconds per episode [30]
+#   EXPERT_SAMPLES, EXPERT_ITERATIONS   the expert's CEM budget [800, 3]
+#   JOBS            labelling threads [all cores]
+#   STEPS, BATCH, ITERATIONS, LR, LR_FINAL   training [6000, 512, 20, 1e-3, 1e-4]
+#   BC_STEPS        steps of bc, which has no projection and is far cheaper per step [4 x STEPS]
+#   MAX_MINUTES     stop each training after this many minutes and write the model (0: no limit) [0]
+#   THREADS         torch CPU threads per training [1]
+# Every dataset file in DATA named demo-*.safetensors is trained on, older ones included.
+#
+# The shipped models were made on one H100 with 16 CPU cores: see the "Training a model" section of the
+# README for the command and docs/results.md for the data size, steps and time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=${1:-cpu}
 shift || true
 [ $# -gt 0 ] && variants=("$@") || variants=(cvae bc fixed-q)
-jobs=${JOBS:-$(nproc)}
-steps=${STEPS:-1200}
+occtrack=${OCCTRACK:-build/occtrack}
 data=${DATA:-build-data}
+chunks=${CHUNKS:-8}
+data_minutes=${DATA_MINUTES:-0}
+jobs=${JOBS:-$(nproc)}
+steps=${STEPS:-6000}
 export OPENBLAS_NUM_THREADS=1
-mkdir -p "$data" models
+models=${MODELS:-models}
+mkdir -p "$data" "$models"
+[ -x "$occtrack" ] || { echo "train_models.sh: no occtrack binary at $occtrack (build with LibTorch first)" >&2; exit 2; }
 
-# 1. Demonstrations: 2 x 16 episodes of 20 s; online Proj-CEM drives, the expert (2000 samples, 4 CEM
-#    iterations, K = 50) labels every second cycle. About 6 minutes on 16 cores.
-half=$(( jobs > 1 ? jobs / 2 : 1 ))
-for part in a:5000 b:6000; do
-  name=${part%%:*}; seed=${part##*:}
-  [ -f "$data/demo-$name.safetensors" ] && continue
-  build/occtrack dataset generate --out "$data/demo-$name.safetensors" --episodes 16 --seed "$seed" \
-    --duration 20 --label-every 2 --driver projcem --jobs "$half" &
+# 1. Demonstrations: chunks of 16 episodes in turn over forest, boxes, mixed and dynamic worlds and target
+#    speeds 1, 1.5 and 2 m/s; online Proj-CEM drives, the expert labels every second cycle. Seeds 7000 + 16 i.
+start=$(date +%s)
+for (( i = 0; i < chunks; i++ )); do
+  out="$data/demo-c$i.safetensors"
+  [ -f "$out" ] && continue
+  if [ "$data_minutes" != 0 ] && [ $(( $(date +%s) - start )) -ge $(( data_minutes * 60 )) ]; then
+    echo "train_models.sh: DATA_MINUTES=$data_minutes reached, $i of $chunks chunks made" >&2
+    break
+  fi
+  "$occtrack" dataset generate --out "$out.partial" --episodes 16 --seed $(( 7000 + 16 * i )) \
+    --duration "${DURATION:-30}" --label-every 2 --driver projcem --jobs "$jobs" \
+    --expert-samples "${EXPERT_SAMPLES:-800}" --expert-iterations "${EXPERT_ITERATIONS:-3}"
+  mv "$out.partial" "$out"
 done
-wait
+files=()
+for f in "$data"/demo-*.safetensors; do files+=(--data "$f"); done
+[ ${#files[@]} -gt 0 ] || { echo "train_models.sh: no datasets in $data" >&2; exit 2; }
 
-# 2. The variants on the same data, side by side (one thread each).
+# 2. The variants on the same data, side by side.
 for variant in "${variants[@]}"; do
-  build/occtrack train --data "$data/demo-a.safetensors" --data "$data/demo-b.safetensors" --variant "$variant" \
-    --steps "$steps" --iterations 20 --threads 1 --device "$device" --seed 1 --out "models/$variant.safetensors" \
-    --checkpoint "$data/$variant.checkpoint" > "$data/train-$variant.log" 2>&1 &
+  variant_steps=$steps
+  [ "$variant" = bc ] && variant_steps=${BC_STEPS:-$(( 4 * steps ))}
+  "$occtrack" train "${files[@]}" --variant "$variant" --device "$device" --threads "${THREADS:-1}" --seed 1 \
+    --steps "$variant_steps" --batch "${BATCH:-512}" --iterations "${ITERATIONS:-20}" --lr "${LR:-1e-3}" \
+    --lr-final "${LR_FINAL:-1e-4}" --max-minutes "${MAX_MINUTES:-100000}" --out "$models/$variant.safetensors" \
+    --checkpoint "$data/$variant.checkpoint" --progress-seconds 30 > "$data/train-$variant.log" 2>&1 &
 done
 wait
 tail -n 3 "$data"/train-*.log

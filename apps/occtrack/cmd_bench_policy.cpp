@@ -36,6 +36,7 @@ struct Options {
   std::string model, variant = "cvae", scenario, json_path;
   bool random = false;
   int batch = 30;
+  bool keep_last_plan = true;
   int iterations = 50;
   int repeats = 1000;
   double seconds = 5.0;
@@ -117,6 +118,7 @@ int run(const Options& o) {
   planners::LearnedPolicySettings settings;
   settings.variant = policy::parse_variant(o.variant);
   settings.batch = o.batch;
+  settings.keep_last_plan = o.keep_last_plan;
   settings.seed = o.seed;
   settings.projection.iterations = o.iterations;
   const std::string scenario_path = resolve_scenario(o.scenario);
@@ -223,6 +225,7 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
       ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
       ->capture_default_str();
   cmd->add_option("--batch", o->batch, "Latent samples per cycle (B)")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_flag("--no-last-plan{false}", o->keep_last_plan, "Project only the B samples, not also the last plan");
   cmd->add_option("--iterations", o->iterations, "Projection iterations per cycle (K)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();

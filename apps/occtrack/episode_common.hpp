@@ -33,6 +33,8 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_option("--batch", o.planner_options.batch, "Learned planners: latent samples per cycle (5 on small hardware)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  cmd->add_flag("--no-last-plan{false}", o.planner_options.keep_last_plan,
+                "Learned planners: rank only the B samples, not also the last plan shifted to now (the paper's policy)");
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
 }
 

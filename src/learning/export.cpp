@@ -31,6 +31,7 @@ std::string training_json(const TrainingRecord& r) {
                             {"steps", r.steps},
                             {"batch", r.batch},
                             {"learning_rate", r.learning_rate},
+                            {"learning_rate_final", r.learning_rate_final},
                             {"beta", r.beta},
                             {"kl_warmup_steps", r.kl_warmup_steps},
                             {"dropout", r.dropout},

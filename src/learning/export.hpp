@@ -30,7 +30,7 @@ struct TrainingRecord {
   int64_t train_rows = 0, validation_rows = 0;
   std::uint64_t seed = 0;
   int64_t steps = 0, batch = 0, kl_warmup_steps = 0;
-  double learning_rate = 0, beta = 0, dropout = 0;
+  double learning_rate = 0, learning_rate_final = 0, beta = 0, dropout = 0;  ///< learning rate: cosine, first to final
   int iterations = 0;           ///< K in training
   bool plain_projection = false;
   std::string device, hardware;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cerrno>
 #include <cstring>
@@ -24,6 +25,9 @@ bool TrainingSettings::validate(std::string* error) const {
   if (steps < 0) return fail("steps (" + std::to_string(steps) + ") must not be negative");
   if (batch <= 0) return fail("batch (" + std::to_string(batch) + ") must be positive");
   if (!(learning_rate > 0)) return fail("learning_rate must be positive");
+  if (!(learning_rate_final < 0 || learning_rate_final <= learning_rate))
+    return fail("learning_rate_final must not exceed learning_rate (negative: constant)");
+  if (!(max_seconds >= 0)) return fail("max_seconds must not be negative");
   if (!(beta >= 0)) return fail("beta must not be negative");
   if (iterations <= 0) return fail("iterations (" + std::to_string(iterations) + ") must be positive");
   if (!(validation_share >= 0 && validation_share < 1)) return fail("validation_share must be in [0, 1)");
@@ -47,6 +51,12 @@ LossTerms LossTerms::operator/(double d) const { return {total / d, mse / d, kl 
 LossTerms LossTensors::values() const {
   auto value = [](const torch::Tensor& t) { return t.defined() ? t.item<double>() : 0.0; };
   return {value(total), value(mse), value(kl), value(residual)};
+}
+
+double learning_rate_at(double first, double final, int64_t step, int64_t steps) {
+  if (final < 0 || steps <= 0) return first;
+  const double t = std::min(1.0, static_cast<double>(step) / static_cast<double>(steps));
+  return final + 0.5 * (first - final) * (1.0 + std::cos(3.14159265358979323846 * t));
 }
 
 double kl_weight(double beta, int64_t step, int64_t warmup_steps) {
@@ -160,6 +170,9 @@ LossTerms Trainer::step() {
   reseed(step_);
   model_->train();
   const Batch batch = data_.gather(sampler_->indices(step_), device_);
+  const double lr = learning_rate_at(settings_.learning_rate, settings_.learning_rate_final, step_, settings_.steps);
+  for (auto& group : optimizer_->param_groups())
+    static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
   optimizer_->zero_grad();
   const LossTensors loss = batch_loss(*model_, batch, *context_, kl_weight(settings_.beta, step_, settings_.kl_warmup_steps));
   loss.total.backward();
@@ -201,7 +214,8 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
     summary.history.push_back(terms);
     report_sum += terms;
     elapsed_seconds_ = elapsed();
-    const bool last = step_ == settings_.steps;
+    const bool out_of_time = settings_.max_seconds > 0 && seconds_since(start) >= settings_.max_seconds;
+    const bool last = step_ == settings_.steps || out_of_time;
     if ((settings_.validation_every > 0 && step_ % settings_.validation_every == 0) || last)
       if (auto v = validate()) {
         pending.validation = v;
@@ -227,6 +241,7 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
       report_step = step_;
       report_time = Clock::now();
     }
+    if (out_of_time) break;
   }
   summary.steps = step_;
   summary.seconds = elapsed_seconds_;
@@ -308,6 +323,7 @@ ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std:
   t.batch = sampler_->batch();
   t.kl_warmup_steps = settings_.kl_warmup_steps;
   t.learning_rate = settings_.learning_rate;
+  t.learning_rate_final = settings_.learning_rate_final < 0 ? settings_.learning_rate : settings_.learning_rate_final;
   t.beta = settings_.beta;
   t.dropout = settings_.network.dropout;
   t.iterations = settings_.iterations;

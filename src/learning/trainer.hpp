@@ -40,7 +40,12 @@ struct TrainingSettings {
   NetworkConfig network;
   int64_t steps = 20000;         ///< optimisation steps in all (a resumed run continues up to this)
   int64_t batch = 256;           ///< rows per mini-batch (cut to the training rows when there are fewer)
-  double learning_rate = 1e-3;   ///< Adam
+  double learning_rate = 1e-3;   ///< Adam, at step 0
+  /// Cosine decay from learning_rate at step 0 to this at `steps` (negative: constant learning_rate).
+  double learning_rate_final = -1;
+  /// Stop this run after this many seconds of training (0: no limit); the run then ends as at its last
+  /// step (validation, checkpoint) and the summary counts the steps done. For fixed-length GPU leases.
+  double max_seconds = 0;
   double beta = 1e-3;            ///< KL weight after the warm-up
   int64_t kl_warmup_steps = 1000;  ///< beta_t = beta * min(1, step / kl_warmup_steps)
   int iterations = 50;           ///< K, unrolled projection iterations in training
@@ -72,6 +77,8 @@ struct LossTensors {
   LossTerms values() const;
 };
 
+/// The learning rate of a step: cosine from `first` at step 0 to `final` at `steps` (final < 0: first).
+double learning_rate_at(double first, double final, int64_t step, int64_t steps);
 /// beta_t = beta * min(1, step / warmup_steps) (warmup_steps <= 0: beta).
 double kl_weight(double beta, int64_t step, int64_t warmup_steps);
 

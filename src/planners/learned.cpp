@@ -26,7 +26,7 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 
 projection::Settings batch_settings(const LearnedPolicySettings& s) {
   projection::Settings p = s.projection;
-  p.batch = s.batch;
+  p.batch = s.batch + (s.keep_last_plan ? 1 : 0);
   return p;
 }
 
@@ -67,6 +67,7 @@ struct LearnedPolicy::Impl {
   std::mt19937_64 rng;
   std::normal_distribution<double> normal{0.0, 1.0};
   Timing timing;
+  Choice choice;
 
   // Per-cycle buffers, sized once.
   policy::Cloud cloud;
@@ -76,6 +77,11 @@ struct LearnedPolicy::Impl {
   Eigen::RowVectorXd xi, nominal;
   std::vector<double> costs;
   std::vector<char> usable;
+  // The last plan (robot-centric at last_origin), for keep_last_plan.
+  Eigen::RowVectorXd last, warm;
+  Eigen::Vector2d last_origin = Eigen::Vector2d::Zero();
+  double last_time = 0.0;
+  bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
       : settings(s), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
@@ -119,8 +125,10 @@ struct LearnedPolicy::Impl {
     obstacles.resize(4 * p.obstacles);
     xi.resize(n2);
     nominal.resize(n2);
-    costs.resize(s.batch);
-    usable.resize(s.batch);
+    costs.resize(p.batch);
+    usable.resize(p.batch);
+    last.resize(n2);
+    warm.resize(n2);
   }
 
   // Problem row b from decoded sample b (docs/learning.md, post-processing steps 2 and 3). False when the
@@ -164,12 +172,14 @@ std::string LearnedPolicy::name() const { return learned_planner_name(impl_->set
 
 void LearnedPolicy::reset() {
   impl_->context.reset();
+  impl_->has_last = false;
   impl_->rng.seed(impl_->settings.seed);
   impl_->normal.reset();
 }
 
 const LearnedPolicy::Timing& LearnedPolicy::last_timing() const { return impl_->timing; }
 const policy::Model& LearnedPolicy::model() const { return impl_->model; }
+const LearnedPolicy::Choice& LearnedPolicy::last_choice() const { return impl_->choice; }
 
 PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   const auto start = Clock::now();
@@ -177,15 +187,20 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   const LearnedPolicySettings& cfg = s.settings;
   const bool project = cfg.variant != policy::Variant::bc;
   const int B = cfg.batch, n2 = static_cast<int>(s.xi.size());
+  // Rows: the B samples, then the last plan shifted to now when there is one (keep_last_plan).
+  const bool warm = cfg.keep_last_plan && s.has_last;
+  const int rows = B + (cfg.keep_last_plan ? 1 : 0);
   PlannerOutput out;
   std::string error;
   s.timing = Timing{};
+  s.choice = Choice{};
   auto finish = [&]() {
     out.compute_ms = ms_between(start, Clock::now());
     s.timing.total = out.compute_ms;
     return std::move(out);
   };
   auto brake = [&](const std::string& message) {
+    s.has_last = false;
     out.ok = false;
     out.message = name() + ": " + message;
     out.command_velocity.setZero();
@@ -222,6 +237,13 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   } else {
     for (int b = 0; b < B; ++b) s.usable[b] = s.outputs.row(b).allFinite();
   }
+  if (cfg.keep_last_plan) {
+    // Without a last plan the row repeats the straight line to the goal and is not ranked.
+    s.warm = warm ? s.context.shift(s.last, frame.time - s.last_time, s.last_origin - frame.origin)
+                  : s.context.straight_line(s.context.goal(frame));
+    if (project) s.context.fill_row(s.problem, B, s.warm, frame);
+    s.usable[B] = warm && s.warm.allFinite();
+  }
   const auto decoded = Clock::now();
   s.timing.decoder = ms_between(encoded, decoded);
 
@@ -237,12 +259,14 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   auto candidate = [&](int b) -> Eigen::RowVectorXd& {
     if (project)
       s.xi = s.result.xi.row(b).cast<double>();
+    else if (b == B)
+      s.xi = s.warm;
     else
       s.xi = s.outputs.row(b).segment(xi_bar, n2).cast<double>();
     return s.xi;
   };
   int best = -1;
-  for (int b = 0; b < B; ++b) {
+  for (int b = 0; b < rows; ++b) {
     s.costs[b] = INFINITY;
     if (!s.usable[b]) continue;
     const Eigen::RowVectorXd& xi = candidate(b);
@@ -256,9 +280,14 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   }
 
   // 7. Command and the world-frame plan.
+  s.choice = Choice{best, s.costs[best], best == B};
   const Eigen::RowVectorXd& plan = candidate(best);
   out.command_velocity = s.context.command(plan);
   out.plan = s.context.world_positions(plan, frame);
+  s.last = plan;
+  s.last_origin = frame.origin;
+  s.last_time = frame.time;
+  s.has_last = true;
   const int kept = std::min(cfg.candidates_kept, B);
   out.candidates.reserve(kept);
   for (int b = 0; b < kept; ++b)

@@ -9,6 +9,7 @@
 #include <unistd.h>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -411,4 +412,43 @@ TEST_F(Training, FixedQIsContextFillRow) {
   const learning::ProjectionInputs cvae = learning::policy_outputs(outputs * 5, observation, obstacles, policy, basis, network);
   EXPECT_GE(cvae.distance_min.min().item<float>(), 1.0f);
   EXPECT_LE(cvae.terminal.index({torch::indexing::Slice(), torch::indexing::Slice(2, 4)}).abs().max().item<float>(), 2.0f);
+}
+
+TEST(LearningRate, CosineFromFirstToFinal) {
+  EXPECT_DOUBLE_EQ(learning::learning_rate_at(1e-3, 1e-4, 0, 100), 1e-3);
+  EXPECT_NEAR(learning::learning_rate_at(1e-3, 1e-4, 50, 100), 5.5e-4, 1e-15);
+  EXPECT_NEAR(learning::learning_rate_at(1e-3, 1e-4, 100, 100), 1e-4, 1e-15);
+  EXPECT_NEAR(learning::learning_rate_at(1e-3, 1e-4, 150, 100), 1e-4, 1e-15);  // past the end: final
+  EXPECT_DOUBLE_EQ(learning::learning_rate_at(1e-3, -1, 70, 100), 1e-3);      // negative final: constant
+  for (int64_t step = 1; step <= 100; ++step)
+    EXPECT_LE(learning::learning_rate_at(1e-3, 1e-4, step, 100), learning::learning_rate_at(1e-3, 1e-4, step - 1, 100));
+}
+
+TEST_F(Training, TimeLimitEndsTheRunAsAtItsLastStep) {
+  const std::string data = path("data.safetensors");
+  io::write_safetensors(data, dataset_file(64));
+  learning::TrainingSettings s = small_settings();
+  s.steps = 1000000;       // far more than the limit allows
+  s.max_seconds = 1e-9;    // out of time after the first step
+  s.learning_rate_final = 1e-4;
+  s.checkpoint_path = path("limited.checkpoint");
+  learning::Trainer trainer(s, learning::load_dataset({data}));
+  const learning::TrainingSummary summary = trainer.run();
+  EXPECT_EQ(summary.steps, 1);
+  EXPECT_EQ(trainer.current_step(), 1);
+  ASSERT_TRUE(summary.validation.has_value());  // validated as at a last step
+  EXPECT_TRUE(std::isfinite(summary.validation->total));
+  EXPECT_TRUE(std::ifstream(s.checkpoint_path).good());  // and checkpointed
+  const auto metadata = trainer.model_metadata(summary, "test");
+  EXPECT_EQ(metadata.training.steps, 1);
+  EXPECT_DOUBLE_EQ(metadata.training.learning_rate_final, 1e-4);
+
+  s.max_seconds = -1;
+  std::string error;
+  EXPECT_FALSE(s.validate(&error));
+  EXPECT_NE(error.find("max_seconds"), std::string::npos) << error;
+  s.max_seconds = 0;
+  s.learning_rate_final = 1.0;  // above the first rate
+  EXPECT_FALSE(s.validate(&error));
+  EXPECT_NE(error.find("learning_rate_final"), std::string::npos) << error;
 }

@@ -63,6 +63,8 @@ std::string canonical_command(const TrainOptions& o) {
   for (std::size_t i = 0; i < s.network.pointnet_widths.size(); ++i)
     c << (i ? "," : "") << s.network.pointnet_widths[i];
   c << " --latent " << s.network.latent << " --dropout " << s.network.dropout;
+  if (s.learning_rate_final >= 0) c << " --lr-final " << s.learning_rate_final;
+  if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
   if (s.plain_projection) c << " --plain-projection";
   if (!o.resume.empty()) c << " --resume " << o.resume;
   return c.str();
@@ -136,6 +138,14 @@ void add_train_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--batch", s.batch, "Rows per mini-batch")->check(CLI::Range(int64_t{1}, int64_t{1} << 24))->capture_default_str();
   cmd->add_option("--lr", s.learning_rate, "Adam learning rate")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--lr-final", s.learning_rate_final,
+                  "Learning rate at the last step, reached by cosine decay from --lr (default: constant --lr)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option_function<double>(
+         "--max-minutes", [&s](double minutes) { s.max_seconds = 60.0 * minutes; },
+         "Stop after this many minutes of training and write the model as at the last step (for fixed-time "
+         "machines; the metadata records the steps done)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--beta", s.beta, "KL weight after the warm-up")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--kl-warmup", s.kl_warmup_steps, "Steps over which the KL weight ramps up to beta")
       ->check(CLI::NonNegativeNumber)

@@ -27,6 +27,10 @@ struct LearnedPolicySettings {
   int batch = 30;              ///< B, latent samples per cycle (5 for constrained hardware)
   std::uint64_t seed = 1;      ///< of the latent samples; reset() starts the sequence over
   int candidates_kept = 30;    ///< projected samples returned for figures (at most B)
+  /// Also project and rank the last cycle's plan, shifted to now (Proj-CEM's warm start), as one more row
+  /// after the B samples. Not in the paper; it keeps the plan from jumping between cycles when a sample
+  /// draw is poor. Off: the paper's policy exactly.
+  bool keep_last_plan = true;
   /// The optimizer run at every cycle; must be the one the model was trained through (Model::check_projection),
   /// except for the iteration count, which may exceed training's. batch is set from `batch`.
   projection::Settings projection = [] {
@@ -54,6 +58,13 @@ class LearnedPolicy final : public Planner {
     double perception = 0, pointnet = 0, decoder = 0, projection = 0, ranking = 0, total = 0;
   };
 
+  /// The last plan() call's choice: the row ranked best (0..B-1 a sample, B the last plan), its ranking cost.
+  struct Choice {
+    int row = -1;                 ///< -1 when the call braked
+    double cost = 0;
+    bool last_plan = false;       ///< the row was the last plan, shifted (keep_last_plan)
+  };
+
   /// Loads settings.model_path (default_model_path(variant) when empty). Throws io::InputError when the file
   /// is missing (saying how to get one), refused by policy::Model, of another variant, or trained for other
   /// projection, perception (cloud and nearest sizes) or band settings; std::invalid_argument for unusable
@@ -72,6 +83,7 @@ class LearnedPolicy final : public Planner {
 
   const Timing& last_timing() const;
   const policy::Model& model() const;
+  const Choice& last_choice() const;
 
  private:
   struct Impl;

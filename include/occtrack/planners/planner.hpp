@@ -52,6 +52,7 @@ struct PlannerOptions {
   bool offline_expert = false;  ///< Proj-CEM: the offline expert budget (thousands of samples)
   std::string model;        ///< learned planners: model file (empty: the shipped model of the variant)
   int batch = 30;           ///< learned planners: samples drawn per cycle (30; 5 for constrained hardware)
+  bool keep_last_plan = true;  ///< learned planners: also rank the last plan, shifted (LearnedPolicySettings)
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".
