@@ -21,8 +21,10 @@
 #   THREADS         torch CPU threads per training [1]
 # Every dataset file in DATA named demo-*.safetensors is trained on, older ones included.
 #
-# The shipped models were made on one H100 with 16 CPU cores: see the "Training a model" section of the
-# README for the command and docs/results.md for the data size, steps and time.
+# The shipped models were made on the 2-core dev machine, no GPU, from the 6400 rows of demo-a and demo-b
+# (2 x 16 episodes of 20 s, seeds 5000 and 6000, the full expert: 2000 samples x 4 iterations):
+#   OCCTRACK=build/occtrack CHUNKS=0 STEPS=4000 BC_STEPS=4000 BATCH=256 MAX_MINUTES=50 scripts/train_models.sh cpu
+# with the two demo files made first (README, "Training a model"). docs/results.md gives the time and losses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=${1:-cpu}

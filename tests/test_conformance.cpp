@@ -18,18 +18,7 @@ using namespace occtrack;
 
 namespace {
 
-std::vector<std::string> case_files() {
-  std::vector<std::string> files;
-  std::stringstream dirs(OCCTRACK_CONFORMANCE_DIRS);
-  std::string dir;
-  while (std::getline(dirs, dir, '|')) {
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& entry : fs::directory_iterator(dir))
-      if (entry.path().extension() == ".json") files.push_back(entry.path().string());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
+std::vector<std::string> case_files() { return test::conformance_case_files(); }
 
 template <typename T, template <typename> class Solver>
 double solve_and_compare(const io::ProjectionCase& c, double* worst_residual = nullptr) {

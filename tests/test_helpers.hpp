@@ -4,10 +4,31 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "occtrack/projection/projector.hpp"
 
 namespace occtrack::test {
+
+#ifdef OCCTRACK_CONFORMANCE_DIRS
+/// The conformance case files (*.json) of the folders in OCCTRACK_CONFORMANCE_DIRS ('|'-separated; missing
+/// folders are skipped), sorted.
+inline std::vector<std::string> conformance_case_files() {
+  std::vector<std::string> files;
+  std::stringstream dirs(OCCTRACK_CONFORMANCE_DIRS);
+  std::string dir;
+  while (std::getline(dirs, dir, '|')) {
+    if (!std::filesystem::is_directory(dir)) continue;
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+      if (entry.path().extension() == ".json") files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+#endif
 
 /// Worst |a - b| / max(1, |b|): relative for entries above 1, absolute below. Non-finite counts as infinite.
 template <typename A, typename B>

@@ -680,22 +680,48 @@ TEST(LearnedPolicy, BrakesWhenEveryDecodedSampleIsNonFinite) {
   // and the planner must not pass that on.
   io::TensorFile f = default_file();
   f.put("norm.output.scale", {252}, std::vector<double>(252, 1e300));
+  const Drive drive = forest_drive(3);
   for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc}) {
     f.metadata["variant"] = policy::to_string(variant);
-    planners::LearnedPolicy planner(policy_settings(variant, 5), policy::Model(f));
-    const Drive drive = forest_drive(1);
+    auto settings = policy_settings(variant, 5);
+    settings.rank_stop = false;
+    planners::LearnedPolicy planner(settings, policy::Model(f));
     const auto out = planner.plan(drive.inputs[0]);
     EXPECT_FALSE(out.ok);
     EXPECT_EQ(out.command_velocity, Eigen::Vector2d::Zero());
     EXPECT_NE(out.message.find("no finite candidate"), std::string::npos) << out.message;
+
+    // With the stop plan ranked (the default), that plan is chosen instead (later, it or its own
+    // continuation, the last plan): a finite command within the acceleration bound of the robot's velocity.
+    // bc projects nothing and has no stop plan.
+    if (variant == policy::Variant::bc) continue;
+    settings.rank_stop = true;
+    planners::LearnedPolicy stopping(settings, policy::Model(f));
+    const double accel_max = settings.projection.accel_max;
+    for (std::size_t k = 0; k < drive.inputs.size(); ++k) {
+      const auto& in = drive.inputs[k];
+      const auto o = stopping.plan(in);
+      expect_usable(o, stopping.name() + " stop plan");
+      EXPECT_TRUE(o.ok) << o.message;
+      const auto& choice = stopping.last_choice();
+      EXPECT_TRUE(k == 0 ? choice.stop : choice.stop || choice.last_plan) << "cycle " << k;
+      EXPECT_LE((o.command_velocity - in.robot_velocity).norm(), accel_max * 0.1 + 1e-6) << "cycle " << k;
+    }
   }
 }
 
 TEST(LearnedPolicy, SameSeedSameCommandsAndResetStartsOver) {
   const Drive drive = forest_drive(5);
-  planners::LearnedPolicy a = random_policy(policy::Variant::cvae, 30, 7);
-  planners::LearnedPolicy b = random_policy(policy::Variant::cvae, 30, 7);
-  planners::LearnedPolicy c = random_policy(policy::Variant::cvae, 30, 8);
+  // Samples only: with random weights the stop plan would win every cycle, whatever the seed.
+  auto samples_only = [](std::uint64_t seed) {
+    auto s = policy_settings(policy::Variant::cvae, 30);
+    s.seed = seed;
+    s.rank_stop = false;
+    s.keep_last_plan = false;
+    return planners::LearnedPolicy(
+        s, policy::Model(policy::random_model(default_network(), default_projection(), "cvae", 5)));
+  };
+  planners::LearnedPolicy a = samples_only(7), b = samples_only(7), c = samples_only(8);
   std::vector<Eigen::Vector2d> first;
   bool differs = false;
   for (const auto& in : drive.inputs) {
@@ -726,6 +752,7 @@ TEST(LearnedPolicy, KeepingTheLastPlanNeverRanksWorseAndIsUsed) {
   const Drive drive = forest_drive(6);
   for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc}) {
     auto settings = policy_settings(variant, 5);
+    settings.rank_stop = false;  // the same rows but the last plan
     settings.keep_last_plan = false;
     const io::TensorFile weights =
         policy::random_model(default_network(), default_projection(), policy::to_string(variant), 5);
@@ -740,12 +767,16 @@ TEST(LearnedPolicy, KeepingTheLastPlanNeverRanksWorseAndIsUsed) {
       EXPECT_FALSE(paper.last_choice().last_plan);
       // Float projection: a batch of B + 1 rows may round a row differently from a batch of B.
       EXPECT_LE(kept.last_choice().cost, paper.last_choice().cost * (1 + 1e-5) + 1e-6) << "cycle " << k;
-      if (k == 0) EXPECT_FALSE(kept.last_choice().last_plan) << "no last plan at the first cycle";
+      if (k == 0) {
+        EXPECT_FALSE(kept.last_choice().last_plan) << "no last plan at the first cycle";
+      }
       used += kept.last_choice().last_plan;
     }
     // Random weights draw poor samples: last cycle's plan, projected again from where it is now, wins some
     // cycles. (bc's last plan is not projected; with random weights it need not ever win.)
-    if (variant == policy::Variant::cvae) EXPECT_GT(used, 0) << kept.name();
+    if (variant == policy::Variant::cvae) {
+      EXPECT_GT(used, 0) << kept.name();
+    }
     kept.reset();
     kept.plan(drive.inputs[0]);
     EXPECT_FALSE(kept.last_choice().last_plan) << "reset() forgets the last plan";

@@ -37,6 +37,7 @@ struct Options {
   bool random = false;
   int batch = 30;
   bool keep_last_plan = true;
+  bool rank_stop = true;
   int iterations = 50;
   int repeats = 1000;
   double seconds = 5.0;
@@ -119,6 +120,7 @@ int run(const Options& o) {
   settings.variant = policy::parse_variant(o.variant);
   settings.batch = o.batch;
   settings.keep_last_plan = o.keep_last_plan;
+  settings.rank_stop = o.rank_stop;
   settings.seed = o.seed;
   settings.projection.iterations = o.iterations;
   const std::string scenario_path = resolve_scenario(o.scenario);
@@ -225,7 +227,8 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
       ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
       ->capture_default_str();
   cmd->add_option("--batch", o->batch, "Latent samples per cycle (B)")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_flag("--no-last-plan{false}", o->keep_last_plan, "Project only the B samples, not also the last plan");
+  cmd->add_flag("--no-last-plan{false}", o->keep_last_plan, "Project the B samples without the last plan");
+  cmd->add_flag("--no-stop{false}", o->rank_stop, "Project the B samples without the stop plan");
   cmd->add_option("--iterations", o->iterations, "Projection iterations per cycle (K)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();

@@ -35,6 +35,8 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
       ->capture_default_str();
   cmd->add_flag("--no-last-plan{false}", o.planner_options.keep_last_plan,
                 "Learned planners: rank only the B samples, not also the last plan shifted to now (the paper's policy)");
+  cmd->add_flag("--no-stop{false}", o.planner_options.rank_stop,
+                "Learned planners: do not rank the stop plan besides the samples (the paper's policy has none)");
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
 }
 

@@ -32,16 +32,17 @@ RowMatrix<double> read_rows(const JsonReader& r, const json& value, const std::s
   return out;
 }
 
-projection::Settings read_config(const JsonReader& r, const json& config) {
-  const std::string p = "config";
-  r.only_keys(config, p,
-              {"degree", "steps", "horizon", "iterations", "obstacle_radius", "speed_min", "speed_max", "accel_max",
-               "via_steps", "rho"});
+projection::Settings read_settings(const JsonReader& r, const json& config, const std::string& p, bool strict) {
+  if (strict)
+    r.only_keys(config, p,
+                {"degree", "steps", "horizon", "iterations", "obstacle_radius", "speed_min", "speed_max", "accel_max",
+                 "via_steps", "rho"});
   projection::Settings s;
   s.degree = r.integer(r.member(config, p, "degree"), p + ".degree");
   s.steps = r.integer(r.member(config, p, "steps"), p + ".steps");
   s.horizon = r.number(r.member(config, p, "horizon"), p + ".horizon");
-  s.iterations = r.integer(r.member(config, p, "iterations"), p + ".iterations");
+  if (strict || config.contains("iterations"))
+    s.iterations = r.integer(r.member(config, p, "iterations"), p + ".iterations");
   s.obstacle_radius = r.number(r.member(config, p, "obstacle_radius"), p + ".obstacle_radius");
   s.speed_min = r.number(r.member(config, p, "speed_min"), p + ".speed_min");
   s.speed_max = r.number(r.member(config, p, "speed_max"), p + ".speed_max");
@@ -50,14 +51,16 @@ projection::Settings read_config(const JsonReader& r, const json& config) {
   if (!via.is_array() || via.size() != 2) r.fail(p + ".via_steps", "must be a list of two step indices [s1, s2]");
   s.via_step_1 = r.integer(via[0], p + ".via_steps[0]");
   s.via_step_2 = r.integer(via[1], p + ".via_steps[1]");
-  const json& rho = r.member(config, p, "rho");
-  const std::string q = p + ".rho";
-  r.only_keys(rho, q, {"obstacle", "velocity", "acceleration", "tracking", "projection"});
-  s.rho.obstacle = r.number(r.member(rho, q, "obstacle"), q + ".obstacle");
-  s.rho.velocity = r.number(r.member(rho, q, "velocity"), q + ".velocity");
-  s.rho.acceleration = r.number(r.member(rho, q, "acceleration"), q + ".acceleration");
-  s.rho.tracking = r.number(r.member(rho, q, "tracking"), q + ".tracking");
-  s.rho.projection = r.number(r.member(rho, q, "projection"), q + ".projection");
+  if (strict || config.contains("rho")) {
+    const json& rho = r.member(config, p, "rho");
+    const std::string q = p + ".rho";
+    if (strict) r.only_keys(rho, q, {"obstacle", "velocity", "acceleration", "tracking", "projection"});
+    s.rho.obstacle = r.number(r.member(rho, q, "obstacle"), q + ".obstacle");
+    s.rho.velocity = r.number(r.member(rho, q, "velocity"), q + ".velocity");
+    s.rho.acceleration = r.number(r.member(rho, q, "acceleration"), q + ".acceleration");
+    s.rho.tracking = r.number(r.member(rho, q, "tracking"), q + ".tracking");
+    s.rho.projection = r.number(r.member(rho, q, "projection"), q + ".projection");
+  }
   return s;
 }
 
@@ -86,7 +89,7 @@ ProjectionCase parse_projection_case(const std::string& text, const std::string&
   ProjectionCase c;
   if (doc.contains("name")) c.name = r.string(doc["name"], "name");
   if (doc.contains("description")) c.description = r.string(doc["description"], "description");
-  c.settings = read_config(r, r.member(doc, "", "config"));
+  c.settings = read_settings(r, r.member(doc, "", "config"), "config", true);
 
   const json& inputs = r.member(doc, "", "inputs");
   r.only_keys(inputs, "inputs",
@@ -174,6 +177,12 @@ std::string projection_result_json(const projection::Result<T>& result, int inde
 
 template std::string projection_result_json<float>(const projection::Result<float>&, int);
 template std::string projection_result_json<double>(const projection::Result<double>&, int);
+
+projection::Settings parse_projection_settings(const std::string& json_text, const std::string& source,
+                                               const std::string& path, bool strict) {
+  const JsonReader r(source);
+  return read_settings(r, detail::parse_json_text(json_text, source), path, strict);
+}
 
 std::string projection_settings_json(const projection::Settings& s) {
   const json config = {{"degree", s.degree},

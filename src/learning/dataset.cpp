@@ -20,41 +20,10 @@ using torch::indexing::Slice;
 // projection metadata
 
 projection::Settings parse_projection_json(const std::string& text) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(std::string("not JSON: ") + e.what());
-  }
-  if (!j.is_object()) throw std::invalid_argument("not a JSON object");
-  auto get = [&](const nlohmann::json& parent, const std::string& path, const char* key) -> const nlohmann::json& {
-    if (!parent.is_object() || !parent.contains(key)) throw std::invalid_argument("'" + path + key + "' is missing");
-    const nlohmann::json& v = parent.at(key);
-    if (!v.is_number() && !v.is_array() && !v.is_object())
-      throw std::invalid_argument("'" + path + key + "' must be a number");
-    return v;
-  };
   projection::Settings s;
   try {
-    s.degree = get(j, "", "degree").get<int>();
-    s.steps = get(j, "", "steps").get<int>();
-    s.horizon = get(j, "", "horizon").get<double>();
-    s.iterations = get(j, "", "iterations").get<int>();
-    s.obstacle_radius = get(j, "", "obstacle_radius").get<double>();
-    s.speed_min = get(j, "", "speed_min").get<double>();
-    s.speed_max = get(j, "", "speed_max").get<double>();
-    s.accel_max = get(j, "", "accel_max").get<double>();
-    const nlohmann::json& via = get(j, "", "via_steps");
-    if (!via.is_array() || via.size() != 2) throw std::invalid_argument("'via_steps' must be a list [s1, s2]");
-    s.via_step_1 = via[0].get<int>();
-    s.via_step_2 = via[1].get<int>();
-    const nlohmann::json& rho = get(j, "", "rho");
-    s.rho.obstacle = get(rho, "rho.", "obstacle").get<double>();
-    s.rho.velocity = get(rho, "rho.", "velocity").get<double>();
-    s.rho.acceleration = get(rho, "rho.", "acceleration").get<double>();
-    s.rho.tracking = get(rho, "rho.", "tracking").get<double>();
-    s.rho.projection = get(rho, "rho.", "projection").get<double>();
-  } catch (const nlohmann::json::exception& e) {
+    s = io::parse_projection_settings(text, "metadata", "projection", /*strict=*/false);
+  } catch (const io::InputError& e) {
     throw std::invalid_argument(e.what());
   }
   std::string error;

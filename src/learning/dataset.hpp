@@ -69,9 +69,9 @@ struct Dataset {
 /// io::InputError naming the file and the tensor or metadata key.
 Dataset load_dataset(const std::vector<std::string>& paths);
 
-/// projection::Settings from the `projection` metadata JSON (degree, steps, horizon, iterations,
-/// obstacle_radius, speed_min, speed_max, accel_max, via_steps [s1, s2], rho {...}); throws
-/// std::invalid_argument naming a missing or malformed field. Other keys are ignored.
+/// projection::Settings from the `projection` metadata JSON (io::parse_projection_settings, not strict:
+/// iterations and rho optional, other keys ignored), validated; throws std::invalid_argument naming a
+/// missing or malformed field.
 projection::Settings parse_projection_json(const std::string& text);
 /// The same fields as JSON text.
 std::string projection_json(const projection::Settings& settings);

@@ -10,22 +10,6 @@ namespace occtrack::learning {
 namespace nn = torch::nn;
 using torch::indexing::Slice;
 
-const char* to_string(Variant variant) {
-  switch (variant) {
-    case Variant::cvae: return "cvae";
-    case Variant::bc: return "bc";
-    case Variant::fixed_q: return "fixed-q";
-  }
-  return "?";
-}
-
-Variant parse_variant(const std::string& text) {
-  if (text == "cvae") return Variant::cvae;
-  if (text == "bc") return Variant::bc;
-  if (text == "fixed-q") return Variant::fixed_q;
-  throw std::invalid_argument("unknown variant '" + text + "' (expected cvae, bc or fixed-q)");
-}
-
 bool NetworkConfig::validate(std::string* error) const {
   auto fail = [&](const std::string& message) {
     if (error) *error = message;

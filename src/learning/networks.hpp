@@ -16,6 +16,8 @@
 
 #include <torch/torch.h>
 
+#include "occtrack/policy/model.hpp"
+
 #include <string>
 #include <vector>
 
@@ -25,17 +27,11 @@
 
 namespace occtrack::learning {
 
-/// The three policies trained on the same data (shared/spec/policy.md, "Variants").
-enum class Variant {
-  cvae,     ///< the decoder predicts xi_bar, lambda0, via points and q; the projection makes the plan feasible
-  bc,       ///< no projection: the decoder's xi_bar is the plan
-  fixed_q,  ///< as cvae, but q (terminal state, distance bounds) is nominal, as Proj-CEM sets it
-};
-
-/// "cvae", "bc", "fixed-q".
-const char* to_string(Variant variant);
-/// Inverse of to_string; throws std::invalid_argument naming the text and the accepted names.
-Variant parse_variant(const std::string& text);
+/// The three policies trained on the same data (shared/spec/policy.md, "Variants"): the run-time library's
+/// enum, with its spellings ("cvae", "bc", "fixed-q") and its parser (io::InputError on an unknown one).
+using Variant = policy::Variant;
+using policy::parse_variant;
+using policy::to_string;
 
 /// Network sizes (docs/learning.md, "Sizes"); every field is stored in the model file's `network` metadata.
 struct NetworkConfig {

@@ -1,5 +1,7 @@
 #include "occtrack/perception/perception.hpp"
 
+#include "../core/settings_checker.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,26 +17,7 @@ namespace occtrack::perception {
 
 namespace {
 
-// Collects the first broken rule; later checks are skipped once one fails.
-class Checker {
- public:
-  template <typename... Parts>
-  void require(bool ok, const Parts&... parts) {
-    if (ok || !message_.empty()) return;
-    std::ostringstream out;
-    out.precision(12);
-    (out << ... << parts);
-    message_ = out.str();
-  }
-  void finite(double value, const char* field) {
-    require(std::isfinite(value), field, " must be a finite number, got ", value);
-  }
-  bool ok() const { return message_.empty(); }
-  const std::string& message() const { return message_; }
-
- private:
-  std::string message_;
-};
+using Checker = occtrack::detail::SettingsChecker;
 
 // Cells per axis beyond which packed 32-bit cell indices could overflow.
 constexpr double kMaxCellsPerAxis = 1e9;

@@ -29,6 +29,7 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
     s.model_path = options.model;  // empty: the shipped model of the variant
     s.batch = options.batch;
     s.keep_last_plan = options.keep_last_plan;
+    s.rank_stop = options.rank_stop;
     s.seed = options.seed;
     return std::make_unique<LearnedPolicy>(s);
   }

@@ -24,9 +24,12 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// bc projects nothing, so it has no stop plan: unprojected, a stop is an instant halt the robot cannot follow.
+bool ranks_stop(const LearnedPolicySettings& s) { return s.rank_stop && s.variant != policy::Variant::bc; }
+
 projection::Settings batch_settings(const LearnedPolicySettings& s) {
   projection::Settings p = s.projection;
-  p.batch = s.batch + (s.keep_last_plan ? 1 : 0);
+  p.batch = s.batch + (s.keep_last_plan ? 1 : 0) + (ranks_stop(s) ? 1 : 0);
   return p;
 }
 
@@ -78,13 +81,14 @@ struct LearnedPolicy::Impl {
   std::vector<double> costs;
   std::vector<char> usable;
   // The last plan (robot-centric at last_origin), for keep_last_plan.
-  Eigen::RowVectorXd last, warm;
+  Eigen::RowVectorXd last, warm, stop;
   Eigen::Vector2d last_origin = Eigen::Vector2d::Zero();
   double last_time = 0.0;
   bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
       : settings(s), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
+    settings.rank_stop = ranks_stop(s);
     const std::string planner = learned_planner_name(s.variant);
     if (s.batch < 1) throw std::invalid_argument("planner " + planner + ": batch must be at least 1");
     if (s.candidates_kept < 0) throw std::invalid_argument("planner " + planner + ": candidates_kept must not be negative");
@@ -129,6 +133,7 @@ struct LearnedPolicy::Impl {
     usable.resize(p.batch);
     last.resize(n2);
     warm.resize(n2);
+    stop.resize(n2);
   }
 
   // Problem row b from decoded sample b (docs/learning.md, post-processing steps 2 and 3). False when the
@@ -187,9 +192,11 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   const LearnedPolicySettings& cfg = s.settings;
   const bool project = cfg.variant != policy::Variant::bc;
   const int B = cfg.batch, n2 = static_cast<int>(s.xi.size());
-  // Rows: the B samples, then the last plan shifted to now when there is one (keep_last_plan).
+  // Rows: the B samples, then the last plan shifted to now when there is one (keep_last_plan), then the stop
+  // plan (rank_stop).
   const bool warm = cfg.keep_last_plan && s.has_last;
-  const int rows = B + (cfg.keep_last_plan ? 1 : 0);
+  const int stop_row = B + (cfg.keep_last_plan ? 1 : 0);
+  const int rows = stop_row + (cfg.rank_stop ? 1 : 0);
   PlannerOutput out;
   std::string error;
   s.timing = Timing{};
@@ -244,6 +251,11 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
     if (project) s.context.fill_row(s.problem, B, s.warm, frame);
     s.usable[B] = warm && s.warm.allFinite();
   }
+  if (cfg.rank_stop) {
+    s.stop.setZero();  // robot-centric: every coefficient at the robot's position
+    if (project) s.context.fill_row(s.problem, stop_row, s.stop, frame);
+    s.usable[stop_row] = true;
+  }
   const auto decoded = Clock::now();
   s.timing.decoder = ms_between(encoded, decoded);
 
@@ -259,6 +271,8 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   auto candidate = [&](int b) -> Eigen::RowVectorXd& {
     if (project)
       s.xi = s.result.xi.row(b).cast<double>();
+    else if (b == stop_row)
+      s.xi = s.stop;
     else if (b == B)
       s.xi = s.warm;
     else
@@ -280,7 +294,7 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   }
 
   // 7. Command and the world-frame plan.
-  s.choice = Choice{best, s.costs[best], best == B};
+  s.choice = Choice{best, s.costs[best], cfg.keep_last_plan && best == B, cfg.rank_stop && best == stop_row};
   const Eigen::RowVectorXd& plan = candidate(best);
   out.command_velocity = s.context.command(plan);
   out.plan = s.context.world_positions(plan, frame);

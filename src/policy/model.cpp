@@ -258,32 +258,7 @@ OutputLayout::OutputLayout(const NetworkConfig& network) {
 std::string projection_json(const projection::Settings& s) { return io::projection_settings_json(s); }
 
 projection::Settings parse_projection_json(const std::string& json_text, const std::string& source) {
-  const JsonReader r(source);
-  const json doc = parse_metadata_json(json_text, source, "projection");
-  const std::string p = "projection";
-  projection::Settings s;
-  s.degree = r.integer(r.member(doc, p, "degree"), p + ".degree");
-  s.steps = r.integer(r.member(doc, p, "steps"), p + ".steps");
-  s.horizon = r.number(r.member(doc, p, "horizon"), p + ".horizon");
-  if (doc.contains("iterations")) s.iterations = r.integer(doc["iterations"], p + ".iterations");
-  s.obstacle_radius = r.number(r.member(doc, p, "obstacle_radius"), p + ".obstacle_radius");
-  s.speed_min = r.number(r.member(doc, p, "speed_min"), p + ".speed_min");
-  s.speed_max = r.number(r.member(doc, p, "speed_max"), p + ".speed_max");
-  s.accel_max = r.number(r.member(doc, p, "accel_max"), p + ".accel_max");
-  const json& via = r.member(doc, p, "via_steps");
-  if (!via.is_array() || via.size() != 2) r.fail(p + ".via_steps", "must be a list of two step indices [s1, s2]");
-  s.via_step_1 = r.integer(via[0], p + ".via_steps[0]");
-  s.via_step_2 = r.integer(via[1], p + ".via_steps[1]");
-  if (doc.contains("rho")) {
-    const json& rho = doc["rho"];
-    const std::string q = p + ".rho";
-    s.rho.obstacle = r.number(r.member(rho, q, "obstacle"), q + ".obstacle");
-    s.rho.velocity = r.number(r.member(rho, q, "velocity"), q + ".velocity");
-    s.rho.acceleration = r.number(r.member(rho, q, "acceleration"), q + ".acceleration");
-    s.rho.tracking = r.number(r.member(rho, q, "tracking"), q + ".tracking");
-    s.rho.projection = r.number(r.member(rho, q, "projection"), q + ".projection");
-  }
-  return s;
+  return io::parse_projection_settings(json_text, source, "projection", /*strict=*/false);
 }
 
 std::string band_json(const core::TrackingBand& band) {

@@ -1,5 +1,7 @@
 #include "occtrack/projection/settings.hpp"
 
+#include "../core/settings_checker.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -7,25 +9,7 @@ namespace occtrack::projection {
 
 namespace {
 
-// Collects the first broken rule; later checks are skipped once one fails.
-class Checker {
- public:
-  template <typename... Parts>
-  void require(bool ok, const Parts&... parts) {
-    if (ok || !message_.empty()) return;
-    std::ostringstream out;
-    (out << ... << parts);
-    message_ = out.str();
-  }
-  void finite(double value, const char* field) {
-    require(std::isfinite(value), field, " must be a finite number, got ", value);
-  }
-  bool ok() const { return message_.empty(); }
-  const std::string& message() const { return message_; }
-
- private:
-  std::string message_;
-};
+using Checker = occtrack::detail::SettingsChecker;
 
 }  // namespace
 

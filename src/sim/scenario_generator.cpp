@@ -16,6 +16,8 @@
 // Positions are rounded before they are checked, so the checks hold for exactly what is written.
 #include "occtrack/sim/scenario_generator.hpp"
 
+#include "../core/settings_checker.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -92,35 +94,7 @@ double wrap_angle(double a) {
 // ---------------------------------------------------------------------------------------------------------
 // Settings checks.
 
-class Checker {
- public:
-  template <typename... Parts>
-  void require(bool ok, const Parts&... parts) {
-    if (ok || !message_.empty()) return;
-    std::ostringstream out;
-    (out << ... << parts);
-    message_ = out.str();
-  }
-  void positive(double value, const char* field) {
-    require(std::isfinite(value) && value > 0.0, field, " must be a positive number, got ", value);
-  }
-  void non_negative(double value, const char* field) {
-    require(std::isfinite(value) && value >= 0.0, field, " must be a finite number >= 0, got ", value);
-  }
-  void range(double lo, double hi, const char* lo_field, const char* hi_field) {
-    require(lo <= hi, lo_field, " (", lo, ") must not exceed ", hi_field, " (", hi, ")");
-  }
-  void share(double value, const char* field) {
-    require(std::isfinite(value) && value >= 0.0 && value <= 1.0, field, " must lie in [0, 1], got ", value);
-  }
-  bool done(std::string* error) const {
-    if (error && !message_.empty()) *error = message_;
-    return message_.empty();
-  }
-
- private:
-  std::string message_;
-};
+using Checker = occtrack::detail::SettingsChecker;
 
 // ---------------------------------------------------------------------------------------------------------
 // Geometry on static shapes (exact).

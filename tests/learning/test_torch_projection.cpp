@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../test_helpers.hpp"
 #include "learning/projection.hpp"
 #include "occtrack/io/projection_case.hpp"
 #include "occtrack/projection/problem_generator.hpp"
@@ -33,18 +34,7 @@ class TorchProjection : public ::testing::Test {
   }
 };
 
-std::vector<std::string> case_files() {
-  std::vector<std::string> files;
-  std::stringstream dirs(OCCTRACK_CONFORMANCE_DIRS);
-  std::string dir;
-  while (std::getline(dirs, dir, '|')) {
-    if (!fs::is_directory(dir)) continue;
-    for (const auto& entry : fs::directory_iterator(dir))
-      if (entry.path().extension() == ".json") files.push_back(entry.path().string());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
+std::vector<std::string> case_files() { return test::conformance_case_files(); }
 
 /// Worst |got - expected| / max(1, |expected|), as tests/test_helpers.hpp measures; non-finite is infinite.
 template <typename Matrix>

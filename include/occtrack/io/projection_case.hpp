@@ -46,4 +46,11 @@ std::string projection_case_json(const ProjectionCase& c, int indent = -1);
 /// the same object in their "projection" metadata.
 std::string projection_settings_json(const projection::Settings& settings);
 
+/// Parses the object projection_settings_json writes, found at `path` of `source` (for messages). strict:
+/// every key, no others (case files, datasets). Not strict: iterations and rho may be missing (their defaults
+/// stay) and other keys are ignored (model metadata). Values are not validated (Settings::validate).
+/// Throws InputError "SOURCE: PATH.KEY: rule".
+projection::Settings parse_projection_settings(const std::string& json_text, const std::string& source,
+                                               const std::string& path, bool strict);
+
 }  // namespace occtrack::io

@@ -31,6 +31,10 @@ struct LearnedPolicySettings {
   /// after the B samples. Not in the paper; it keeps the plan from jumping between cycles when a sample
   /// draw is poor. Off: the paper's policy exactly.
   bool keep_last_plan = true;
+  /// Also project and rank a plan that stops where the robot is (braking within the acceleration bound), as
+  /// one more row after those. Not in the paper; it is chosen when every other row runs into an obstacle.
+  /// Ignored by bc, which projects nothing (an unprojected stop is a halt the robot cannot follow).
+  bool rank_stop = true;
   /// The optimizer run at every cycle; must be the one the model was trained through (Model::check_projection),
   /// except for the iteration count, which may exceed training's. batch is set from `batch`.
   projection::Settings projection = [] {
@@ -63,6 +67,7 @@ class LearnedPolicy final : public Planner {
     int row = -1;                 ///< -1 when the call braked
     double cost = 0;
     bool last_plan = false;       ///< the row was the last plan, shifted (keep_last_plan)
+    bool stop = false;            ///< the row was the stop plan (rank_stop)
   };
 
   /// Loads settings.model_path (default_model_path(variant) when empty). Throws io::InputError when the file

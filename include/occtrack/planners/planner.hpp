@@ -53,6 +53,7 @@ struct PlannerOptions {
   std::string model;        ///< learned planners: model file (empty: the shipped model of the variant)
   int batch = 30;           ///< learned planners: samples drawn per cycle (30; 5 for constrained hardware)
   bool keep_last_plan = true;  ///< learned planners: also rank the last plan, shifted (LearnedPolicySettings)
+  bool rank_stop = true;       ///< learned planners: also rank a plan that stops (LearnedPolicySettings)
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".
