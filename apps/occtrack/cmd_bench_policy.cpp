@@ -171,8 +171,13 @@ int run(const Options& o) {
                 sj = summarize(projection), sr = summarize(ranking);
 
   const auto& net = planner->model().network();
-  std::printf("policy %s (%s model), batch %d, %d projection iterations, %d obstacle points, one core\n",
-              planner->name().c_str(), model_name.c_str(), o.batch, o.iterations, settings.projection.obstacles);
+  // The rows solved per cycle: the B samples, the last plan and the stop plan (planners/learned.hpp).
+  const bool projects = settings.variant != policy::Variant::bc;
+  const int rows = o.batch + (o.keep_last_plan ? 1 : 0) + (o.rank_stop && projects ? 1 : 0);
+  std::printf("policy %s (%s model), batch %d (%d rows ranked%s%s), %d projection iterations, %d obstacle points, "
+              "one core\n",
+              planner->name().c_str(), model_name.c_str(), o.batch, rows, o.keep_last_plan ? ", last plan" : "",
+              o.rank_stop && projects ? ", stop plan" : "", o.iterations, settings.projection.obstacles);
   std::printf("  network: PointNet widths ");
   for (std::size_t i = 0; i < net.pointnet_widths.size(); ++i)
     std::printf("%s%d", i ? "-" : "", net.pointnet_widths[i]);
@@ -191,6 +196,9 @@ int run(const Options& o) {
         {"planner", planner->name()},
         {"model", model_name},
         {"batch", o.batch},
+        {"rows", rows},
+        {"last_plan", o.keep_last_plan},
+        {"stop_plan", o.rank_stop && projects},
         {"iterations", o.iterations},
         {"obstacles", settings.projection.obstacles},
         {"scenario", scenario.name},
