@@ -45,6 +45,19 @@ std::optional<DemonstrationWorld> parse_demonstration_world(std::string_view tex
 
 namespace {
 
+// Appends every row of `from` to `into`, its episode numbers shifted by `episode_offset`.
+void append_rows(Demonstrations& into, const Demonstrations& from, std::int32_t episode_offset) {
+  auto cat = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
+  cat(into.observation, from.observation);
+  cat(into.cloud, from.cloud);
+  cat(into.obstacles, from.obstacles);
+  cat(into.expert_xi, from.expert_xi);
+  cat(into.expert_cost, from.expert_cost);
+  cat(into.time, from.time);
+  for (std::int32_t e : from.episode) into.episode.push_back(e + episode_offset);
+  into.rows += from.rows;
+}
+
 /// The benchmark's world settings of a kind (their seeds are not used): the static suites' forest, boxes and
 /// mixed worlds, and the dynamic suite's world with moving obstacles.
 GeneratorSettings world_settings(DemonstrationWorld world) {
@@ -479,18 +492,8 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   data.episode.reserve(static_cast<std::size_t>(rows));
   data.time.reserve(static_cast<std::size_t>(rows));
   for (Demonstrations& e : episodes) {  // ordered by episode, whatever order the threads finished in
-    auto cat = [](auto& into, auto& from) {
-      into.insert(into.end(), from.begin(), from.end());
-      from = {};
-    };
-    cat(data.observation, e.observation);
-    cat(data.cloud, e.cloud);
-    cat(data.obstacles, e.obstacles);
-    cat(data.expert_xi, e.expert_xi);
-    cat(data.expert_cost, e.expert_cost);
-    cat(data.episode, e.episode);
-    cat(data.time, e.time);
-    data.rows += e.rows;
+    append_rows(data, e, 0);
+    e = Demonstrations{};  // free each episode's buffers as soon as they are copied
   }
   data.metadata["rows"] = std::to_string(data.rows);
   std::sort(report.failures.begin(), report.failures.end());
@@ -658,15 +661,7 @@ void append_demonstrations(Demonstrations& into, const Demonstrations& more) {
   }
   std::int32_t offset = 0;
   for (std::int32_t e : into.episode) offset = std::max(offset, e + 1);
-  auto cat = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
-  cat(into.observation, more.observation);
-  cat(into.cloud, more.cloud);
-  cat(into.obstacles, more.obstacles);
-  cat(into.expert_xi, more.expert_xi);
-  cat(into.expert_cost, more.expert_cost);
-  cat(into.time, more.time);
-  for (std::int32_t e : more.episode) into.episode.push_back(e + offset);
-  into.rows += more.rows;
+  append_rows(into, more, offset);
   into.metadata["rows"] = std::to_string(into.rows);
 }
 

@@ -107,6 +107,12 @@ struct Settings {
   /// True when every field holds a usable value. Otherwise false, and *error (when given) names the first
   /// broken field and its rule, for example "voxel_size (0) must be positive".
   bool validate(std::string* error = nullptr) const;
+  /// The defaults with the target's velocity estimated from its track, as the planners perceive.
+  static Settings tracking() {
+    Settings s;
+    s.estimate_velocity = true;
+    return s;
+  }
 
   bool operator==(const Settings&) const = default;
 };

@@ -37,16 +37,8 @@ struct LearnedPolicySettings {
   bool rank_stop = true;
   /// The optimizer run at every cycle; must be the one the model was trained through (Model::check_projection),
   /// except for the iteration count, which may exceed training's. batch is set from `batch`.
-  projection::Settings projection = [] {
-    projection::Settings s;
-    s.iterations = 50;
-    return s;
-  }();
-  perception::Settings perception = [] {
-    perception::Settings s;
-    s.estimate_velocity = true;
-    return s;
-  }();
+  projection::Settings projection = projection::Settings::with_iterations(50);
+  perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
 };
 

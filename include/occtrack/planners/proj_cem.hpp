@@ -23,16 +23,8 @@ struct ProjCemSettings {
   double min_std = 0.05;         ///< metres: floor of the refitted spread
   int candidates_kept = 24;      ///< projected samples returned for figures
   std::uint64_t seed = 1;
-  projection::Settings projection = [] {
-    projection::Settings s;
-    s.iterations = 30;
-    return s;
-  }();
-  perception::Settings perception = [] {
-    perception::Settings s;
-    s.estimate_velocity = true;
-    return s;
-  }();
+  projection::Settings projection = projection::Settings::with_iterations(30);
+  perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
 
   /// The offline expert: 2000 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.

@@ -47,6 +47,12 @@ struct Settings {
   /// True when every field holds a usable value. Otherwise false, and *error (when given) names the first
   /// broken field and its rule, for example "speed_min (3) must not exceed speed_max (2)".
   bool validate(std::string* error = nullptr) const;
+  /// The defaults with another iteration count (the planners' presets).
+  static Settings with_iterations(int count) {
+    Settings s;
+    s.iterations = count;
+    return s;
+  }
 
   bool operator==(const Settings&) const = default;
 };
