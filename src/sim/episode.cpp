@@ -31,24 +31,6 @@ bool EpisodeSettings::validate(std::string* error) const {
   return false;
 }
 
-namespace {
-
-core::TimingSummary timing(std::vector<double> values) {
-  core::TimingSummary t;
-  if (values.empty()) return t;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  t.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-  t.p99 = values[std::min(n - 1, static_cast<std::size_t>(std::ceil(0.99 * n)) - 1)];
-  t.max = values.back();
-  double sum = 0;
-  for (double v : values) sum += v;
-  t.mean = sum / n;
-  return t;
-}
-
-}  // namespace
-
 EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& planner, const EpisodeSettings& settings,
                           const std::function<void(double)>& progress) {
   std::string error;
@@ -163,7 +145,7 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
   m.success = m.occlusion_time_s == 0.0;
   m.acceleration.mean = accel_sum / counted;
   if (!std::isfinite(m.acceleration.min)) m.acceleration.min = 0;
-  m.compute_ms = timing(compute);
+  m.compute_ms = core::summarize_timings(compute);
   m.tracking_distance_mean_m = distance_sum / counted;
   m.tracking_in_band_share = double(in_band) / counted;
   if (progress) progress(1.0);

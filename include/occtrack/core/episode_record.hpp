@@ -6,14 +6,12 @@
 #include <vector>
 
 #include "occtrack/core/scenario.hpp"
+#include "occtrack/core/timing.hpp"
 
 namespace occtrack::core {
 
 struct Summary3 {
   double mean = 0, min = 0, max = 0;
-};
-struct TimingSummary {
-  double mean = 0, median = 0, p99 = 0, max = 0;
 };
 
 /// Per-episode metrics, with the spec's keys (io/results.hpp writes the JSON).

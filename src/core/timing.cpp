@@ -1,0 +1,25 @@
+#include "occtrack/core/timing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <numeric>
+
+namespace occtrack::core {
+
+TimingSummary summarize_timings(std::vector<double> values) {
+  TimingSummary t;
+  if (values.empty()) return t;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  t.count = static_cast<int>(n);
+  t.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  const auto rank = static_cast<std::size_t>(std::ceil(0.99 * static_cast<double>(n)));
+  t.p99 = values[std::min(n, std::max<std::size_t>(rank, 1)) - 1];
+  t.min = values.front();
+  t.max = values.back();
+  t.mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(n);
+  return t;
+}
+
+}  // namespace occtrack::core
