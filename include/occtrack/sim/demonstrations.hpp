@@ -229,6 +229,8 @@ Demonstrations read_demonstrations(const std::string& path);
 /// sizes and the same projection and perception metadata (std::invalid_argument naming the key otherwise);
 /// the provenance of `into` is kept. Appending to an empty Demonstrations copies.
 void append_demonstrations(Demonstrations& into, const Demonstrations& more);
+/// Appends every row of `from` to `into`, its episode numbers shifted by `episode_offset` (no checks).
+void append_rows(Demonstrations& into, const Demonstrations& from, std::int32_t episode_offset);
 
 /// Summary statistics for `occtrack dataset info`.
 struct DemonstrationStatistics {
