@@ -1,40 +1,11 @@
 // Once set up, Projector::solve performs no heap allocation (threads == 1). Two independent witnesses:
-// Eigen's own check (EIGEN_RUNTIME_NO_MALLOC, assertions on: any Eigen allocation aborts), and a count of
-// every global operator new in this program.
+// Eigen's own check (EIGEN_RUNTIME_NO_MALLOC, assertions on: any Eigen allocation aborts), and the count of
+// every operator new and malloc in this program (allocation_counter.hpp).
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
+#include "allocation_counter.hpp"
 #include "occtrack/projection/problem_generator.hpp"
 #include "occtrack/projection/projector.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-  ++g_allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  ++g_allocations;
-  const std::size_t a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -55,11 +26,11 @@ long allocations_during_solve(int batch, int obstacles, bool history, int steps 
   fill_random_problem<T>(s, {7, 0.3}, problem);
   Result<T> result = projector.make_result();
   std::string error;
-  const long before = g_allocations.load();
+  occtrack::test::AllocationCount count;
   Eigen::internal::set_is_malloc_allowed(false);
   const bool ok = projector.solve(problem, result, &error);
   Eigen::internal::set_is_malloc_allowed(true);
-  const long during = g_allocations.load() - before;
+  const long during = count.allocations();
   EXPECT_TRUE(ok) << error;
   EXPECT_EQ(result.status, SolveStatus::solved);
   return during;
@@ -77,11 +48,11 @@ TEST(NoAllocation, SolveDoesNotAllocateInFloatOrDouble) {
 }
 
 TEST(NoAllocation, TheWitnessesWork) {
-  // The counter sees allocations...
-  const long before = g_allocations.load();
+  // The counter sees allocations (setting up a projector makes its workspaces)...
+  occtrack::test::AllocationCount count;
   Settings s;
   Projector<float> projector(s);
-  EXPECT_GT(g_allocations.load() - before, 0);
+  EXPECT_GT(count.allocations(), 0);
   // ...and Eigen's check is armed (it aborts on an allocation while forbidden).
   EXPECT_DEATH(
       {

@@ -1,0 +1,334 @@
+// The planning cycle's memory contracts, counted (allocation_counter.hpp: every operator new and malloc,
+// freed or not) on the scans of short closed-loop episodes of the shipped smoke scenarios:
+//   - Perception::process allocates nothing after its first scan (perception.hpp, "Memory");
+//   - Model::features and Model::decode allocate nothing within the reserved sizes (model.hpp, "Memory");
+//   - World::scan into a sized Scan allocates nothing (world.hpp);
+//   - Planner::plan(input, out) of LearnedPolicy (cvae, cvae-fixed-q, bc), ProjCem and the follower, given
+//     the same `out` every cycle, allocates nothing after the first cycle (planner.hpp).
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "allocation_counter.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/policy/model.hpp"
+#include "occtrack/sim/episode.hpp"
+#include "occtrack/sim/world.hpp"
+
+using namespace occtrack;
+using test::AllocationCount;
+
+namespace {
+
+const char* const kScenarios[] = {OCCTRACK_SCENARIO_DIR "/static-1ms-smoke/forest-a-1.yaml",
+                                  OCCTRACK_SCENARIO_DIR "/dynamic-1.5ms-smoke/dynamic-a-1.yaml"};
+constexpr double kEpisodeSeconds = 3.0;  // 60 planning cycles at 20 Hz
+
+core::Scenario short_scenario(const std::string& path) {
+  core::Scenario scenario = io::read_scenario(path);
+  scenario.duration = kEpisodeSeconds;
+  return scenario;
+}
+
+// What a planner saw in a closed-loop episode (the follower driving): the inputs, each with its own scan.
+struct Recording {
+  std::vector<core::Scan> scans;
+  std::vector<planners::PlannerInput> inputs;  // .scan points into scans
+};
+
+class Recorder final : public planners::Planner {
+ public:
+  explicit Recorder(Recording& recording) : recording_(recording) {}
+  std::string name() const override { return "recorder"; }
+  void reset() override { follower_.reset(); }
+  using Planner::plan;
+  void plan(const planners::PlannerInput& input, planners::PlannerOutput& out) override {
+    recording_.scans.push_back(*input.scan);
+    recording_.inputs.push_back(input);
+    follower_.plan(input, out);
+  }
+  const planners::PlanRecord& last_record() const override { return follower_.last_record(); }
+
+ private:
+  Recording& recording_;
+  planners::Follower follower_;
+};
+
+Recording record(const std::string& scenario_path) {
+  Recording r;
+  Recorder recorder(r);
+  sim::run_episode(short_scenario(scenario_path), recorder, sim::EpisodeSettings{});
+  for (std::size_t k = 0; k < r.inputs.size(); ++k) r.inputs[k].scan = &r.scans[k];
+  return r;
+}
+
+// "cycle 3: 2, cycle 7: 1" for the cycles whose count is not zero (empty when all are).
+std::string nonzero(const std::vector<long>& counts, std::size_t first_cycle = 0) {
+  std::ostringstream out;
+  for (std::size_t k = 0; k < counts.size(); ++k)
+    if (counts[k] != 0) out << (out.tellp() > 0 ? ", " : "") << "cycle " << first_cycle + k << ": " << counts[k];
+  return out.str();
+}
+
+}  // namespace
+
+namespace {
+// Keeps an allocation observable, so that the compiler may not elide it (C++14 allows eliding new-expressions).
+void keep(const void* p) { asm volatile("" : : "g"(p) : "memory"); }
+}  // namespace
+
+// The witness itself: what it must see, and that it sees nothing before its region or outside it.
+TEST(AllocationCount, CountsEachAllocationInItsRegion) {
+  std::vector<int> before(10);
+  keep(before.data());
+  {
+    AllocationCount count;
+    EXPECT_EQ(count.allocations(), 0) << "an allocation made before the region";
+    std::vector<int> deliberate(10);
+    keep(deliberate.data());
+    EXPECT_EQ(count.allocations(), 1);
+  }
+  {
+    AllocationCount count;
+    // Eigen allocates with malloc, not operator new: the count must see that too.
+    Eigen::MatrixXd m(50, 50);
+    keep(m.data());
+    const long eigen = count.allocations();
+    auto p = std::make_unique<int>(3);
+    keep(p.get());
+    EXPECT_EQ(eigen, 1);
+    EXPECT_EQ(count.allocations(), 2);
+  }
+  {
+    AllocationCount count;
+    before.assign(10, 1);  // reuses its storage
+    EXPECT_EQ(count.allocations(), 0);
+  }
+}
+
+TEST(AllocationCount, AnAllocationFreedInsideTheRegionStillCounts) {
+  AllocationCount count;
+  {
+    std::string temporary(100, 'x');  // a heap-size comparison before and after would see no change
+    keep(temporary.data());
+  }
+  EXPECT_EQ(count.allocations(), 1);
+}
+
+TEST(AllocationCount, WorldScanIntoASizedScanDoesNotAllocate) {
+  for (const char* path : kScenarios) {
+    const core::Scenario scenario = short_scenario(path);
+    sim::World world(scenario);
+    std::mt19937_64 rng(3);
+    core::Scan scan;
+    world.scan(scenario.robot_position, 0.0, rng, scan);
+    std::vector<long> counts;
+    for (int k = 1; k <= 40; ++k) {
+      const core::Vec2 position = scenario.robot_position + core::Vec2(0.05 * k, -0.03 * k);
+      AllocationCount count;
+      world.scan(position, 0.05 * k, rng, scan);
+      counts.push_back(count.allocations());
+    }
+    EXPECT_EQ(nonzero(counts, 1), "") << path;
+  }
+}
+
+TEST(AllocationCount, PerceptionProcessDoesNotAllocateAfterTheFirstScan) {
+  for (const char* path : kScenarios) {
+    const Recording recording = record(path);
+    ASSERT_GE(recording.inputs.size(), 50u);
+    for (const bool velocity : {false, true}) {
+      perception::Settings settings;
+      settings.estimate_velocity = velocity;
+      perception::Perception perception(settings);
+      perception::Observation out;
+      ASSERT_TRUE(perception.process(recording.scans[0], recording.inputs[0].robot_position, out));
+      std::vector<long> counts;
+      int failures = 0, clusters = 0;
+      for (std::size_t k = 1; k < recording.inputs.size(); ++k) {
+        AllocationCount count;
+        const bool ok = perception.process(recording.scans[k], recording.inputs[k].robot_position, out);
+        counts.push_back(count.allocations());
+        failures += !ok;
+        clusters = std::max(clusters, out.clusters);
+      }
+      EXPECT_EQ(failures, 0);
+      EXPECT_EQ(nonzero(counts, 1), "") << path << ", estimate_velocity " << velocity;
+      if (velocity) {
+        EXPECT_GT(clusters, 0) << "the tracking path ran";
+      }
+      // The other half of the contract, and the count's witness: a scan with more beams than any before
+      // grows the buffers.
+      core::Scan finer = recording.scans.back();
+      finer.ranges.resize(2 * finer.ranges.size(), finer.range_max / 2);
+      finer.angle_increment /= 2;
+      finer.time += 0.05;
+      AllocationCount count;
+      EXPECT_TRUE(perception.process(finer, recording.inputs.back().robot_position, out));
+      EXPECT_GT(count.allocations(), 0) << path << ", twice the beams";
+    }
+  }
+}
+
+namespace {
+
+std::unique_ptr<policy::Model> shipped_model(const char* variant) {
+  const std::string path = std::string(OCCTRACK_MODEL_DIR) + "/" + variant + ".safetensors";
+  if (!std::filesystem::exists(path)) return nullptr;
+  return std::make_unique<policy::Model>(policy::Model::load(path));
+}
+
+// The clouds and observations of a recording, as the learned planner hands them to the networks.
+struct NetworkInputs {
+  std::vector<policy::Cloud> clouds;  // the distinct points only (1..C rows)
+  std::vector<Eigen::VectorXf> observations;
+};
+
+NetworkInputs network_inputs(const Recording& recording, int cloud_size) {
+  perception::Settings settings = perception::Settings::tracking();
+  settings.cloud_size = cloud_size;
+  perception::Perception perception(settings);
+  NetworkInputs in;
+  for (const planners::PlannerInput& input : recording.inputs) {
+    perception::Observation o;
+    if (!perception.process(*input.scan, input.robot_position, o)) continue;
+    const Eigen::Index distinct = std::clamp<Eigen::Index>(o.voxels, 1, o.cloud.rows());
+    in.clouds.push_back(o.cloud.topRows(distinct).cast<float>());
+    Eigen::VectorXf observation(6);
+    const core::Vec2 target = input.target_position - input.robot_position;
+    observation << float(input.robot_velocity.x()), float(input.robot_velocity.y()), float(target.x()),
+        float(target.y()), float(input.target_velocity.x()), float(input.target_velocity.y());
+    in.observations.push_back(observation);
+  }
+  return in;
+}
+
+}  // namespace
+
+TEST(AllocationCount, ModelFeaturesAndDecodeDoNotAllocateWithinTheReservedSizes) {
+  std::unique_ptr<policy::Model> model = shipped_model("cvae");
+  if (!model) GTEST_SKIP() << "no shipped model in " OCCTRACK_MODEL_DIR;
+  const policy::NetworkConfig& net = model->network();
+  const int batch = 30;
+  model->reserve(batch, net.cloud_points);
+  for (const char* path : kScenarios) {
+    const NetworkInputs in = network_inputs(record(path), net.cloud_points);
+    ASSERT_GE(in.clouds.size(), 50u);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<float> normal;
+    policy::Rows z(batch, net.latent), outputs(batch, net.outputs);
+    Eigen::VectorXf features(net.features);
+    // Warm-up: one call of each.
+    model->features(in.clouds[0], features);
+    model->decode(z.setZero(), in.observations[0], features, outputs);
+
+    std::vector<long> feature_counts, decode_counts;
+    for (std::size_t k = 0; k < in.clouds.size(); ++k) {
+      for (Eigen::Index i = 0; i < z.size(); ++i) z.data()[i] = normal(rng);
+      const int samples = k % 3 == 0 ? 5 : batch;  // fewer samples than reserved too
+      {
+        AllocationCount count;
+        model->features(in.clouds[k], features);
+        feature_counts.push_back(count.allocations());
+      }
+      {
+        AllocationCount count;
+        model->decode(z.topRows(samples), in.observations[k], features, outputs.topRows(samples));
+        decode_counts.push_back(count.allocations());
+      }
+      ASSERT_TRUE(outputs.topRows(samples).allFinite()) << "cycle " << k;
+    }
+    EXPECT_EQ(nonzero(feature_counts), "") << path << ": features";
+    EXPECT_EQ(nonzero(decode_counts), "") << path << ": decode";
+  }
+}
+
+// The contract's other half (model.hpp): past the reserve the workspaces grow, once. This also shows that the
+// count sees the networks' allocations.
+TEST(AllocationCount, ModelWorkspacesGrowOncePastTheReserve) {
+  std::unique_ptr<policy::Model> model = shipped_model("cvae");
+  if (!model) GTEST_SKIP() << "no shipped model in " OCCTRACK_MODEL_DIR;
+  const policy::NetworkConfig& net = model->network();
+  const int batch = 45, points = net.cloud_points + 50;  // the constructor reserved 30 and cloud_points
+  const policy::Cloud cloud = policy::Cloud::Random(points, 2) * 4.0f;
+  Eigen::VectorXf features(net.features), observation = Eigen::VectorXf::Zero(net.observation);
+  const policy::Rows z = policy::Rows::Random(batch, net.latent);
+  policy::Rows outputs(batch, net.outputs);
+  std::vector<long> counts;
+  for (int k = 0; k < 3; ++k) {
+    AllocationCount count;
+    model->features(cloud, features);
+    model->decode(z, observation, features, outputs);
+    counts.push_back(count.allocations());
+  }
+  EXPECT_GT(counts[0], 0) << points << " points and " << batch << " samples exceed the reserve";
+  EXPECT_EQ(counts[1], 0);
+  EXPECT_EQ(counts[2], 0);
+}
+
+namespace {
+
+constexpr std::size_t kPlannerWarmUp = 1;  // the first cycle sizes the output (plan, candidates)
+
+// Replays each scenario's recording through the planner (reset first), into one reused output: the
+// allocations of each cycle after warm-up, "" when there are none, else "SCENARIO cycle K: COUNT, ...".
+std::string planner_allocations(planners::Planner& planner) {
+  std::string found;
+  for (const char* path : kScenarios) {
+    const Recording recording = record(path);
+    planner.reset();
+    planners::PlannerOutput out;
+    std::vector<long> counts;
+    int failures = 0;
+    for (std::size_t k = 0; k < recording.inputs.size(); ++k) {
+      AllocationCount count;
+      planner.plan(recording.inputs[k], out);
+      if (k >= kPlannerWarmUp) counts.push_back(count.allocations());
+      failures += !out.ok;
+    }
+    EXPECT_EQ(failures, 0) << planner.name() << ", " << path;
+    EXPECT_GT(counts.size(), 40u);
+    // The count's witness: the same cycle into a fresh output allocates (the output's vectors at least).
+    AllocationCount fresh;
+    const planners::PlannerOutput once = planner.plan(recording.inputs.back());
+    EXPECT_GT(fresh.allocations(), 0) << planner.name() << ", fresh output";
+    const std::string here = nonzero(counts, kPlannerWarmUp);
+    if (!here.empty()) found += (found.empty() ? "" : "; ") + std::filesystem::path(path).stem().string() + " " + here;
+  }
+  return found;
+}
+
+}  // namespace
+
+TEST(AllocationCount, LearnedPlanDoesNotAllocateAfterTheFirstCycle) {
+  for (const char* variant : {"cvae", "cvae-fixed-q", "bc"}) {
+    planners::PlannerOptions options;
+    options.model = std::string(OCCTRACK_MODEL_DIR) + "/" +
+                    (std::string(variant) == "cvae-fixed-q" ? "fixed-q" : variant) + ".safetensors";
+    if (!std::filesystem::exists(options.model)) GTEST_SKIP() << "no shipped model " << options.model;
+    std::unique_ptr<planners::Planner> planner = planners::make_planner(variant, options);
+    EXPECT_EQ(planner_allocations(*planner), "") << variant;
+  }
+}
+
+TEST(AllocationCount, ProjCemPlanDoesNotAllocateAfterTheFirstCycle) {
+  planners::PlannerOptions options;
+  options.samples = 48;  // the default's code path (one thread), at a third of the time
+  std::unique_ptr<planners::Planner> planner = planners::make_planner("projcem", options);
+  EXPECT_EQ(planner_allocations(*planner), "");
+}
+
+TEST(AllocationCount, FollowerPlanDoesNotAllocateAfterTheFirstCycle) {
+  std::unique_ptr<planners::Planner> planner = planners::make_planner("follower");
+  EXPECT_EQ(planner_allocations(*planner), "");
+}
