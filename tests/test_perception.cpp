@@ -3,10 +3,6 @@
 // against a brute-force voxelisation.
 #include <gtest/gtest.h>
 
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -212,28 +208,6 @@ TEST(PerceptionSettings, BrokenFieldsAreNamed) {
       EXPECT_NE(std::string(e.what()).find(c.field), std::string::npos) << e.what();
     }
   }
-}
-
-TEST(PerceptionSettings, EqualityComparesEveryField) {
-  const Settings base;
-  auto differs = [&](auto mutate) {
-    Settings s = base;
-    mutate(s);
-    return !(s == base);
-  };
-  EXPECT_TRUE(differs([](Settings& s) { s.voxel_size = 0.2; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.cloud_size = 100; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.nearest_count = 10; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.far_point_distance = 50.0; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.estimate_velocity = true; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.cluster_distance = 0.4; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.max_match_distance = 0.4; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.match_reference_period = 0.1; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.velocity_window = 0.5; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.min_track_scans = 3; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.static_speed_threshold = 0.1; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.max_object_extent = 3.0; }));
-  EXPECT_TRUE(differs([](Settings& s) { s.max_scan_gap = 1.0; }));
 }
 
 // One point per occupied voxel, each the centroid of its voxel's returns.
@@ -616,33 +590,3 @@ TEST(Perception, Deterministic) {
   EXPECT_EQ(once.cloud, twice.cloud);
   EXPECT_EQ(once.nearest, twice.nearest);
 }
-
-#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
-// After the first scan of a size, process() keeps its buffers: the bytes the C heap holds do not change over
-// many more scans of that size (a buffer that grew, or leaked, would change them). A witness of the header's
-// memory contract; tests/test_no_allocation.cpp-style operator new counting is stricter.
-TEST(Perception, BuffersStopGrowingAfterTheFirstScan) {
-  Scene scene = cluttered_scene(9);
-  scene.circles.push_back({{1.5, -2.0}, 0.3, Vector2d(0.6, 0.4)});
-  scene.circles.push_back({{-2.5, 2.0}, 0.25, Vector2d(-0.5, 0.2)});
-  std::vector<core::Scan> scans;
-  std::vector<Vector2d> robots;
-  for (int k = 0; k < 200; ++k) {
-    robots.push_back(Vector2d(-1.0 + 0.02 * k, 0.01 * k));
-    scans.push_back(cast(scene, robots.back(), 0.05 * k));
-  }
-  for (const bool velocity : {false, true}) {
-    Settings s;
-    s.estimate_velocity = velocity;
-    Perception perception(s);
-    Observation out;
-    ASSERT_TRUE(perception.process(scans[0], robots[0], out));
-    const std::size_t before = mallinfo2().uordblks;
-    bool ok = true;
-    for (std::size_t k = 1; k < scans.size(); ++k) ok = perception.process(scans[k], robots[k], out) && ok;
-    const std::size_t after = mallinfo2().uordblks;
-    EXPECT_TRUE(ok);
-    EXPECT_EQ(after, before) << "estimate_velocity " << velocity;
-  }
-}
-#endif

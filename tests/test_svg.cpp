@@ -158,7 +158,6 @@ std::string lower(std::string s) {
 TEST(Svg, OptionsValidate) {
   std::string error;
   EXPECT_TRUE(SvgOptions{}.validate(&error)) << error;
-  EXPECT_TRUE(SvgOptions{} == SvgOptions{});
   SvgOptions narrow;
   narrow.width_px = 100;
   EXPECT_FALSE(narrow.validate(&error));
