@@ -110,16 +110,6 @@ double sampled_gap(const sim::Shape& a, const sim::Shape& b) {
   return gap;
 }
 
-sim::Shape shape_of(const ObstacleSpec& o) {
-  sim::Shape s;
-  s.kind = o.shape;
-  s.center = o.center;
-  s.radius = o.radius;
-  s.half_size = 0.5 * o.size;
-  s.yaw = o.yaw;
-  return s;
-}
-
 double path_length(const std::vector<Vec2>& path) {
   double length = 0.0;
   for (std::size_t j = 1; j < path.size(); ++j) length += (path[j] - path[j - 1]).norm();
@@ -184,7 +174,7 @@ TEST(ScenarioGenerator, StaticObstaclesKeepTheMinimumGap) {
     const Scenario world = sim::generate_world(settings, 11);
     for (std::size_t i = 0; i < world.obstacles.size(); ++i)
       for (std::size_t j = i + 1; j < world.obstacles.size(); ++j) {
-        const sim::Shape a = shape_of(world.obstacles[i]), b = shape_of(world.obstacles[j]);
+        const sim::Shape a = sim::shape_of(world.obstacles[i]), b = sim::shape_of(world.obstacles[j]);
         if ((a.center - b.center).norm() > 6.0) continue;  // bounding circles at most 1.8 m each
         EXPECT_GE(sampled_gap(a, b), settings.min_gap - 1e-3) << "obstacles " << i << " and " << j;
       }

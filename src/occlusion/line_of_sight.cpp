@@ -1,20 +1,17 @@
 #include "occtrack/occlusion/line_of_sight.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace occtrack::occlusion {
-
-double point_segment_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double s = length2 > 0.0 ? std::clamp((q - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (q - (a + s * ab)).norm();
-}
 
 double occlusion_cost(const Eigen::Ref<const Eigen::MatrixX2d>& positions,
                       const Eigen::Ref<const Eigen::MatrixX2d>& targets, const Eigen::VectorXd& times,
                       const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>& points,
                       const Eigen::VectorXd& weights, int stride, double margin) {
+  if (stride < 1)
+    throw std::invalid_argument("occlusion_cost: stride (" + std::to_string(stride) + ") must be at least 1");
   double cost = 0.0;
   const double margin2 = margin * margin;
   for (Eigen::Index k = 0; k < positions.rows(); k += stride) {

@@ -1,5 +1,5 @@
-// The simulated world (shared/spec/simulation.md, "Simulation semantics"): exact 2D geometry of circles and
-// rotated boxes, obstacle and target motion, and the LiDAR.
+// The simulated world (shared/spec/simulation.md, "Simulation semantics"): obstacle and target motion, the
+// LiDAR, and the exact queries of the metrics, on the shapes of sim/geometry.
 //
 // The scan is the hot path of the benchmark (720 beams, about 50 shapes, 20 times per simulated second, hours
 // of simulated time). Rather than testing every beam against every shape, each shape visits only the beams
@@ -19,108 +19,6 @@ namespace occtrack::sim {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-// --- Kernels, shared by the public functions and by World, so that a scan equals ray_distance() beam by beam
-// and clearance() equals signed_distance() bit for bit. They are kept out of line on purpose: inlined, GCC
-// fuses multiply-adds differently at each call site (-ffp-contract=fast), and the results drift by an ulp.
-// Measured, the calls cost nothing noticeable (a scan of 50 shapes takes some 10 to 25 us either way).
-
-// Ray-circle: the stable form, which computes the discriminant from the perpendicular offset h of the centre
-// from the ray rather than as b^2 - c (no cancellation; a beam through the centre gives d - r exactly).
-[[gnu::noinline]] double ray_circle(double center_x, double center_y, double radius, const Vec2& origin,
-                         const Vec2& direction, double max_range) {
-  const double mx = origin.x() - center_x, my = origin.y() - center_y;
-  const double r2 = radius * radius;
-  if (mx * mx + my * my <= r2) return 0.0;  // origin inside or on the boundary
-  const double b = mx * direction.x() + my * direction.y();
-  if (b >= 0.0) return kInfinity;  // origin outside and the circle behind it
-  const double hx = mx - b * direction.x(), hy = my - b * direction.y();
-  const double discriminant = r2 - (hx * hx + hy * hy);
-  if (discriminant < 0.0) return kInfinity;
-  const double t = std::max(0.0, -b - std::sqrt(discriminant));
-  return t <= max_range ? t : kInfinity;
-}
-
-// Clips the parametric line o + t d (in the box frame) against the slabs |x| <= hx, |y| <= hy, starting from
-// [t_min, t_max]; returns false when the interval becomes empty. A zero direction component keeps the
-// interval if the line lies inside that slab (its boundary included).
-inline bool clip_slabs(double ox, double oy, double dx, double dy, double hx, double hy, double& t_min,
-                       double& t_max) {
-  const double o[2] = {ox, oy}, d[2] = {dx, dy}, h[2] = {hx, hy};
-  for (int axis = 0; axis < 2; ++axis) {
-    if (d[axis] == 0.0) {
-      if (std::abs(o[axis]) > h[axis]) return false;
-      continue;
-    }
-    double t1 = (-h[axis] - o[axis]) / d[axis], t2 = (h[axis] - o[axis]) / d[axis];
-    if (t1 > t2) std::swap(t1, t2);
-    t_min = std::max(t_min, t1);
-    t_max = std::min(t_max, t2);
-    if (t_min > t_max) return false;
-  }
-  return true;
-}
-
-// A world point in the frame of a box (centre c, axis (cos yaw, sin yaw)): R(yaw)^T (p - c).
-inline Vec2 to_box_frame(const Vec2& v, const Vec2& axis) {
-  return {axis.x() * v.x() + axis.y() * v.y(), -axis.y() * v.x() + axis.x() * v.y()};
-}
-
-// Ray-box: the slab method in the box frame.
-[[gnu::noinline]] double ray_box(const Vec2& center, const Vec2& half_size, const Vec2& axis, const Vec2& origin,
-                      const Vec2& direction, double max_range) {
-  const Vec2 o = to_box_frame(origin - center, axis);
-  const Vec2 d = to_box_frame(direction, axis);
-  double t_min = -kInfinity, t_max = kInfinity;
-  if (!clip_slabs(o.x(), o.y(), d.x(), d.y(), half_size.x(), half_size.y(), t_min, t_max)) return kInfinity;
-  if (t_max < 0.0) return kInfinity;  // the box lies behind the origin
-  if (t_min <= 0.0) return 0.0;       // origin inside or on the boundary
-  return t_min <= max_range ? t_min : kInfinity;
-}
-
-[[gnu::noinline]] double signed_distance_circle(const Vec2& center, double radius, const Vec2& p) {
-  return (p - center).norm() - radius;
-}
-
-[[gnu::noinline]] double signed_distance_box(const Vec2& center, const Vec2& half_size, const Vec2& axis,
-                                             const Vec2& p) {
-  const Vec2 q = to_box_frame(p - center, axis).cwiseAbs() - half_size;
-  const double outside = q.cwiseMax(0.0).norm();
-  const double inside = std::min(std::max(q.x(), q.y()), 0.0);
-  return outside + inside;
-}
-
-[[gnu::noinline]] bool segment_circle(const Vec2& center, double radius, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double s = length2 > 0.0 ? std::clamp((center - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (a + s * ab - center).squaredNorm() <= radius * radius;
-}
-
-[[gnu::noinline]] bool segment_box(const Vec2& center, const Vec2& half_size, const Vec2& axis, const Vec2& a,
-                        const Vec2& b) {
-  const Vec2 o = to_box_frame(a - center, axis);
-  const Vec2 d = to_box_frame(b - a, axis);
-  double t_min = 0.0, t_max = 1.0;
-  return clip_slabs(o.x(), o.y(), d.x(), d.y(), half_size.x(), half_size.y(), t_min, t_max);
-}
-
-Vec2 axis_of(const Shape& shape) {
-  return shape.kind == core::ObstacleSpec::Shape::box ? Vec2(std::cos(shape.yaw), std::sin(shape.yaw))
-                                                      : Vec2(1.0, 0.0);
-}
-
-double bounding_radius_of(const Shape& shape) {
-  return shape.kind == core::ObstacleSpec::Shape::box ? shape.half_size.norm() : shape.radius;
-}
-
-// Distance from p to the closed segment a-b.
-double segment_point_distance(const Vec2& a, const Vec2& b, const Vec2& p) {
-  const Vec2 ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double s = length2 > 0.0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (a + s * ab - p).norm();
-}
 
 [[noreturn]] void invalid(const std::string& field, const std::string& rule) {
   throw std::invalid_argument("sim::World: scenario." + field + ": " + rule);
@@ -163,27 +61,6 @@ void check_scenario(const core::Scenario& s) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------
-// Shapes.
-
-double signed_distance(const Shape& shape, const Vec2& p) {
-  if (shape.kind == core::ObstacleSpec::Shape::box)
-    return signed_distance_box(shape.center, shape.half_size, axis_of(shape), p);
-  return signed_distance_circle(shape.center, shape.radius, p);
-}
-
-double ray_distance(const Shape& shape, const Vec2& origin, const Vec2& direction, double max_range) {
-  if (shape.kind == core::ObstacleSpec::Shape::box)
-    return ray_box(shape.center, shape.half_size, axis_of(shape), origin, direction, max_range);
-  return ray_circle(shape.center.x(), shape.center.y(), shape.radius, origin, direction, max_range);
-}
-
-bool segment_intersects(const Shape& shape, const Vec2& a, const Vec2& b) {
-  if (shape.kind == core::ObstacleSpec::Shape::box)
-    return segment_box(shape.center, shape.half_size, axis_of(shape), a, b);
-  return segment_circle(shape.center, shape.radius, a, b);
-}
-
-// ---------------------------------------------------------------------------------------------------------
 // World.
 
 World::World(const core::Scenario& scenario) : scenario_(scenario) {
@@ -196,14 +73,9 @@ World::World(const core::Scenario& scenario) : scenario_(scenario) {
   box_axis_.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     const core::ObstacleSpec& spec = scenario_.obstacles[k];
-    Shape& shape = shapes_[k];
-    shape.kind = spec.shape;
-    shape.center = spec.center;
-    shape.radius = spec.shape == core::ObstacleSpec::Shape::circle ? spec.radius : 0.0;
-    shape.half_size = spec.shape == core::ObstacleSpec::Shape::box ? Vec2(0.5 * spec.size) : Vec2(Vec2::Zero());
-    shape.yaw = spec.shape == core::ObstacleSpec::Shape::box ? spec.yaw : 0.0;
-    box_axis_[k] = axis_of(shape);
-    bounding_radius_[k] = bounding_radius_of(shape);
+    shapes_[k] = shape_of(spec);
+    box_axis_[k] = box_axis(shapes_[k]);
+    bounding_radius_[k] = bounding_radius(shapes_[k]);
     if (!spec.moving()) continue;
     std::vector<double>& arc = path_arc_[k];
     arc.assign(1, 0.0);
@@ -216,8 +88,7 @@ World::World(const core::Scenario& scenario) : scenario_(scenario) {
   beam_directions_.resize(static_cast<std::size_t>(scenario_.sensor.beams));
   const double increment = 2.0 * std::numbers::pi / scenario_.sensor.beams;
   for (std::size_t i = 0; i < beam_directions_.size(); ++i) {
-    const double angle = static_cast<double>(i) * increment;
-    beam_directions_[i] = Vec2(std::cos(angle), std::sin(angle));
+    beam_directions_[i] = core::direction(static_cast<double>(i) * increment);
   }
 }
 
@@ -315,11 +186,7 @@ void World::scan(const Vec2& position, double t, std::mt19937_64& rng, core::Sca
       double& hit = out.ranges[static_cast<std::size_t>(i)];
       if (nearest_possible >= hit) continue;  // this beam already hit something nearer
       const Vec2& direction = beam_directions_[static_cast<std::size_t>(i)];
-      const double t_hit = shape.kind == core::ObstacleSpec::Shape::box
-                               ? ray_box(shape.center, shape.half_size, box_axis_[k], position, direction, range)
-                               : ray_circle(shape.center.x(), shape.center.y(), shape.radius, position, direction,
-                                            range);
-      hit = std::min(hit, t_hit);
+      hit = std::min(hit, ray_distance(shape, box_axis_[k], position, direction, range));
     }
   }
 
@@ -336,13 +203,11 @@ bool World::segment_blocked(const Vec2& a, const Vec2& b, double t) {
   const std::vector<Shape>& shapes = shapes_at(t);
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     const Shape& shape = shapes[k];
-    if (shape.kind == core::ObstacleSpec::Shape::circle) {
-      if (segment_circle(shape.center, shape.radius, a, b)) return true;
-      continue;
-    }
     // Boxes: the bounding circle first (a box the segment passes far from costs one distance).
-    if (segment_point_distance(a, b, shape.center) > bounding_radius_[k]) continue;
-    if (segment_box(shape.center, shape.half_size, box_axis_[k], a, b)) return true;
+    if (shape.kind == core::ObstacleSpec::Shape::box &&
+        core::point_segment_distance(shape.center, a, b) > bounding_radius_[k])
+      continue;
+    if (segment_intersects(shape, box_axis_[k], a, b)) return true;
   }
   return false;
 }
@@ -354,10 +219,7 @@ double World::clearance(const Vec2& p, double t) {
     const Shape& shape = shapes[k];
     const double centre_distance = (p - shape.center).norm();
     if (centre_distance - bounding_radius_[k] >= best) continue;  // cannot be nearer than the best so far
-    const double d = shape.kind == core::ObstacleSpec::Shape::box
-                         ? signed_distance_box(shape.center, shape.half_size, box_axis_[k], p)
-                         : signed_distance_circle(shape.center, shape.radius, p);
-    best = std::min(best, d);
+    best = std::min(best, signed_distance(shape, box_axis_[k], p));
   }
   return best;
 }

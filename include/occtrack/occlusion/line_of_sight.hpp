@@ -6,14 +6,13 @@
 
 namespace occtrack::occlusion {
 
-/// Distance from point q to the segment a-b.
-double point_segment_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
-
 /// Occlusion cost of one trajectory. For every `stride`-th step k, the line of sight runs from the robot's
 /// planned position (positions row k) to the target's predicted position (targets row k); every obstacle point
 /// (x, y, vx, vy, predicted linearly to t_k) closer than `margin` to it adds (margin - distance)^2, weighted by
 /// `weights(k)` (for instance more weight on the near future). Points within `margin` of the target itself are
-/// ignored: a scan often sees the target, and it cannot occlude itself.
+/// ignored: a scan often sees the target, and it cannot occlude itself. The distance is
+/// core::point_segment_distance's, computed inline with the segment's terms hoisted out of the loop over points.
+/// Throws std::invalid_argument when stride < 1 (the steps would never advance).
 double occlusion_cost(const Eigen::Ref<const Eigen::MatrixX2d>& positions,
                       const Eigen::Ref<const Eigen::MatrixX2d>& targets, const Eigen::VectorXd& times,
                       const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>& points,

@@ -1,6 +1,6 @@
-// The simulated world: obstacle shapes over time, the target's replayed path, LiDAR ray casting and the
-// exact geometry the metrics need (shared/spec/simulation.md). Only the simulator knows the world; planners
-// see scans.
+// The simulated world: obstacle shapes over time, the target's replayed path, LiDAR scans and the exact
+// queries the metrics need (shared/spec/simulation.md), on the shapes of occtrack/sim/geometry.hpp. Only the
+// simulator knows the world; planners see scans.
 #pragma once
 
 #include <cstdint>
@@ -9,28 +9,11 @@
 
 #include "occtrack/core/scan.hpp"
 #include "occtrack/core/scenario.hpp"
+#include "occtrack/sim/geometry.hpp"
 
 namespace occtrack::sim {
 
 using core::Vec2;
-
-/// One obstacle's shape at one instant.
-struct Shape {
-  core::ObstacleSpec::Shape kind = core::ObstacleSpec::Shape::circle;
-  Vec2 center = Vec2::Zero();
-  double radius = 0.0;       ///< circle
-  Vec2 half_size = Vec2::Zero();  ///< box: half extents along its own axes
-  double yaw = 0.0;          ///< box
-  Vec2 velocity = Vec2::Zero();   ///< current velocity of the shape (zero for static ones)
-};
-
-/// Signed distance from point p to the shape's boundary: negative inside.
-double signed_distance(const Shape& shape, const Vec2& p);
-/// Smallest t in [0, max_range] with origin + t * direction on the shape (direction of unit length);
-/// returns +infinity when the ray misses within max_range. An origin inside the shape returns 0.
-double ray_distance(const Shape& shape, const Vec2& origin, const Vec2& direction, double max_range);
-/// Whether the closed segment a-b touches the shape (interior or boundary).
-bool segment_intersects(const Shape& shape, const Vec2& a, const Vec2& b);
 
 class World {
  public:
