@@ -41,13 +41,14 @@ std::string temp_path(const std::string& name) {
       .string();
 }
 
-/// Wraps the expert and keeps what it was given and what it returned.
+/// Wraps the expert and keeps what it was given, what it returned and the record it kept of the cycle.
 class Spy final : public planners::Planner {
  public:
   struct Call {
     planners::PlannerInput input;
     core::Scan scan;
     planners::PlannerOutput output;
+    planners::PlanRecord record;
   };
   explicit Spy(const planners::ProjCemSettings& s) : inner_(s) {}
   std::string name() const override { return "spy"; }
@@ -55,12 +56,15 @@ class Spy final : public planners::Planner {
     inner_.reset();
     calls.clear();
   }
-  planners::PlannerOutput plan(const planners::PlannerInput& input) override {
-    Call call{input, *input.scan, inner_.plan(input)};
+  using planners::Planner::plan;
+  void plan(const planners::PlannerInput& input, planners::PlannerOutput& out) override {
+    inner_.plan(input, out);
+    Call call{input, *input.scan, out, inner_.last_record()};
     call.input.scan = nullptr;
+    call.record.frame.scan = nullptr;
     calls.push_back(call);
-    return call.output;
   }
+  const planners::PlanRecord& last_record() const override { return inner_.last_record(); }
   std::vector<Call> calls;
 
  private:
@@ -74,7 +78,9 @@ core::Scenario orbit(double duration) {
 }
 
 /// Checks every row of `recorder` against the expert calls it was made from: the observation as given, the
-/// cloud and obstacles of a perception fed the expert's scans, and coefficients that reproduce the plan.
+/// cloud and obstacles of an independent perception fed the expert's scans, coefficients that reproduce the
+/// plan the expert returned, and a cost equal to the expert's own and to an independent ranking of the plan
+/// in that frame, scan included (the shadow term the expert ranked by).
 void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const std::vector<Spy::Call>& calls,
                              const planners::ProjCemSettings& expert, int label_every, bool expert_drives) {
   const core::BernsteinBasis basis =
@@ -82,6 +88,7 @@ void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const s
   const int n = expert.projection.coefficients();
   perception::Perception reference(expert.perception);
   perception::Observation seen;
+  const planners::Ranking ranking(expert.ranking, expert.projection);
   std::size_t row = 0;
   for (std::size_t c = 0; c < calls.size(); ++c) {
     const Spy::Call& call = calls[c];
@@ -89,6 +96,7 @@ void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const s
     const bool labelled = !expert_drives || c % static_cast<std::size_t>(label_every) == 0;
     if (!labelled) continue;
     ASSERT_TRUE(call.output.ok) << call.output.message;
+    ASSERT_TRUE(call.record.valid);
     ASSERT_LT(row, recorder.rows().size());
     const sim::DemonstrationRow& r = recorder.rows()[row++];
     EXPECT_EQ(r.time, call.input.time);
@@ -99,13 +107,23 @@ void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const s
     EXPECT_EQ(r.obstacles, seen.nearest) << "cycle " << c << ": velocity tracks differ from the expert's";
     double worst = 0.0;
     for (int k = 0; k < basis.steps; ++k) {
-      const Eigen::Vector2d fitted(basis.P.row(k).dot(r.expert_xi.head(n)), basis.P.row(k).dot(r.expert_xi.tail(n)));
-      worst = std::max(worst, (fitted - (call.output.plan[static_cast<std::size_t>(k)] - call.input.robot_position))
+      const Eigen::Vector2d planned(basis.P.row(k).dot(r.expert_xi.head(n)), basis.P.row(k).dot(r.expert_xi.tail(n)));
+      worst = std::max(worst, (planned - (call.output.plan[static_cast<std::size_t>(k)] - call.input.robot_position))
                                   .cwiseAbs()
                                   .maxCoeff());
     }
-    EXPECT_LT(worst, 1e-6) << "cycle " << c;
-    EXPECT_LE(r.fit_residual, sim::kPlanFitTolerance);
+    EXPECT_LT(worst, 1e-9) << "cycle " << c;
+    // The cost is the expert's own, and what the ranking makes of the plan with the scan.
+    EXPECT_EQ(r.expert_cost, call.record.terms.total) << "cycle " << c;
+    const int distinct = std::min<int>(seen.voxels, static_cast<int>(seen.cloud.rows()));
+    const int near = std::min<int>(distinct, static_cast<int>(seen.nearest.rows()));
+    planners::PointRows occluders(distinct, 4);
+    occluders.topRows(near) = seen.nearest.topRows(near);
+    for (int i = near; i < distinct; ++i) occluders.row(i) << seen.cloud(i, 0), seen.cloud(i, 1), 0, 0;
+    Eigen::Vector4d target;
+    target << call.input.target_position - call.input.robot_position, call.input.target_velocity;
+    const planners::RankingTerms terms = ranking.evaluate(r.expert_xi, target, seen.nearest, occluders, &call.scan);
+    EXPECT_NEAR(r.expert_cost, terms.total, 1e-9 * std::max(1.0, std::abs(terms.total))) << "cycle " << c;
     EXPECT_TRUE(std::isfinite(r.expert_cost));
     EXPECT_GE(r.expert_cost, 0.0);
   }
@@ -114,32 +132,11 @@ void expect_rows_match_calls(const sim::DemonstrationRecorder& recorder, const s
 
 }  // namespace
 
-TEST(Demonstrations, FitCoefficientsRecoversBernsteinCoefficients) {
-  const core::BernsteinBasis basis = core::bernstein_basis(10, 100, 5.0);
-  std::mt19937_64 rng(3);
-  std::normal_distribution<double> normal(0.0, 3.0);
-  Eigen::RowVectorXd xi(22);
-  for (int i = 0; i < 22; ++i) xi(i) = normal(rng);
-  const core::Vec2 origin(12.5, -7.25);
-  std::vector<core::Vec2> positions(100);
-  for (int k = 0; k < 100; ++k)
-    positions[k] = origin + core::Vec2(basis.P.row(k).dot(xi.head(11)), basis.P.row(k).dot(xi.tail(11)));
-  double residual = 1.0;
-  const Eigen::RowVectorXd back = sim::fit_coefficients(basis, positions, origin, &residual);
-  EXPECT_LT((back - xi).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_LT(residual, 1e-12);
-  positions[40].x() += 0.01;  // not a Bernstein trajectory any more
-  sim::fit_coefficients(basis, positions, origin, &residual);
-  EXPECT_GT(residual, sim::kPlanFitTolerance);
-  positions.pop_back();
-  EXPECT_THROW(sim::fit_coefficients(basis, positions, origin), std::invalid_argument);
-}
-
 TEST(Demonstrations, RowsHoldWhatTheDrivingExpertSawAndPlanned) {
   planners::ProjCemSettings expert = tiny().expert;
   auto spy = std::make_unique<Spy>(expert);
   Spy* log = spy.get();
-  sim::DemonstrationRecorder recorder(std::move(spy), nullptr, expert, 2);
+  sim::DemonstrationRecorder recorder(std::move(spy), nullptr, 2);
   sim::run_episode(orbit(2.0), recorder, {});
   ASSERT_EQ(log->calls.size(), 40u) << "the driving expert runs once per cycle";
   EXPECT_EQ(recorder.report().labelled, 20);
@@ -153,7 +150,7 @@ TEST(Demonstrations, AnotherDriverDrivesWhileTheExpertLabelsEveryThirdCycle) {
   planners::ProjCemSettings expert = tiny().expert;
   auto spy = std::make_unique<Spy>(expert);
   Spy* log = spy.get();
-  sim::DemonstrationRecorder recorder(std::move(spy), planners::make_planner("follower"), expert, 3);
+  sim::DemonstrationRecorder recorder(std::move(spy), planners::make_planner("follower"), 3);
   const sim::EpisodeResult result = sim::run_episode(orbit(2.0), recorder, {});
   EXPECT_EQ(result.metrics.planner, "follower");
   ASSERT_EQ(log->calls.size(), 14u) << "cycles 0, 3, ..., 39";
@@ -173,7 +170,6 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   EXPECT_EQ(report.rows + report.skipped(), report.labelled);
   EXPECT_EQ(report.labelled, 120);
   ASSERT_GT(report.rows, 100);
-  EXPECT_LE(report.worst_fit_residual, sim::kPlanFitTolerance);
 
   const std::string path = temp_path("demo.safetensors");
   sim::write_demonstrations(path, data);

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
 #include "occtrack/io/safetensors.hpp"
@@ -37,6 +38,11 @@ struct GenerateOptions {
   int jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   int expert_samples = 2000;
   int expert_iterations = 4;
+};
+
+struct MergeOptions {
+  std::string out;
+  std::vector<std::string> inputs;
 };
 
 std::string join(const std::vector<std::string>& items, const char* separator = ",") {
@@ -116,11 +122,7 @@ int generate(const GenerateOptions& o) {
   s.expert = planners::ProjCemSettings::offline_expert(1);
   s.expert.samples = o.expert_samples;
   s.expert.cem_iterations = o.expert_iterations;
-  std::string created_by = "occtrack";
-#ifdef OCCTRACK_VERSION
-  created_by += " " OCCTRACK_VERSION;
-#endif
-  s.created_by = created_by + ": " + canonical_command(o);
+  s.created_by = created_by(canonical_command(o));
   std::string error;
   if (!s.validate(&error)) {
     std::cerr << who << option_of(error) << error << "\n";
@@ -155,14 +157,44 @@ int generate(const GenerateOptions& o) {
   std::printf("wrote %s: %lld rows from %d episodes (%d skipped by the scenario generator) in %.1f s, %.2f rows/s\n",
               o.out.c_str(), static_cast<long long>(report.rows), report.episodes, report.episodes_failed,
               report.seconds, rate);
-  std::printf("  cycles %lld, labelled %lld, skipped %lld (expert failed %lld, non-finite %lld, fit %lld); "
-              "worst fit residual %.1e m; expert %.1f ms per labelled cycle\n",
+  std::printf("  cycles %lld, labelled %lld, skipped %lld (expert failed %lld, non-finite %lld); "
+              "expert %.1f ms per labelled cycle\n",
               static_cast<long long>(report.cycles), static_cast<long long>(report.labelled),
               static_cast<long long>(report.skipped()), static_cast<long long>(report.skipped_failed),
-              static_cast<long long>(report.skipped_nonfinite), static_cast<long long>(report.skipped_fit),
-              report.worst_fit_residual,
+              static_cast<long long>(report.skipped_nonfinite),
               report.labelled > 0 ? report.expert_ms / static_cast<double>(report.labelled) : 0.0);
   return kExitOk;
+}
+
+// `dataset generate`: its options, and generate() above as its body.
+void add_generate_command(CLI::App& dataset, int& exit_code) {
+  auto [gen, o] = add_command<GenerateOptions>(
+      dataset, "generate",
+      "Run closed-loop episodes on generated worlds (seeds outside the benchmark's 1000-1999) and write the "
+      "expert's labelled planning cycles as a safetensors dataset");
+  gen->add_option("--out", o->out, "Dataset file to write (safetensors)")->required();
+  gen->add_option("--episodes", o->episodes, "Episodes, each in a world of its own")->capture_default_str();
+  gen->add_option("--seed", o->seed, "First seed; episode i uses seed + i (none may fall in 1000-1999)")
+      ->capture_default_str();
+  gen->add_option("--duration", o->duration, "Simulated seconds per episode")->capture_default_str();
+  gen->add_option("--worlds", o->worlds, "World kinds, used in turn: forest, boxes, mixed, dynamic")
+      ->delimiter(',')
+      ->capture_default_str();
+  gen->add_option("--speeds", o->speeds, "Target top speeds (m/s), used in turn after every world kind")
+      ->delimiter(',')
+      ->capture_default_str();
+  gen->add_option("--label-every", o->label_every, "Label one planning cycle in this many")->capture_default_str();
+  std::string names = join(planners::planner_names(), ", ");
+  gen->add_option("--driver", o->driver,
+                  "Who drives: expert (the labeller itself), or a planner (" + names +
+                      ") while the expert labels (DAgger with a learned planner and --model)")
+      ->capture_default_str();
+  gen->add_option("--model", o->model, "Model file of a learned --driver");
+  gen->add_option("--jobs", o->jobs, "Episodes run at the same time (default: every hardware thread)")
+      ->capture_default_str();
+  gen->add_option("--expert-samples", o->expert_samples, "Expert's samples per CEM iteration")->capture_default_str();
+  gen->add_option("--expert-iterations", o->expert_iterations, "Expert's CEM iterations")->capture_default_str();
+  set_command_body(gen, exit_code, [o] { return generate(*o); });
 }
 
 int info(const std::string& path) {
@@ -218,71 +250,20 @@ int merge(const std::string& out, const std::vector<std::string>& inputs) {
 }  // namespace
 
 void add_dataset_command(CLI::App& app, int& exit_code) {
-  CLI::App* dataset = app.add_subcommand("dataset", "Make and inspect demonstration files for training");
-  dataset->require_subcommand(1);
+  CLI::App* dataset = add_command_group(app, "dataset", "Make and inspect demonstration files for training");
+  add_generate_command(*dataset, exit_code);
 
-  auto o = std::make_shared<GenerateOptions>();
-  CLI::App* gen = dataset->add_subcommand(
-      "generate",
-      "Run closed-loop episodes on generated worlds (seeds outside the benchmark's 1000-1999) and write the "
-      "expert's labelled planning cycles as a safetensors dataset");
-  gen->add_option("--out", o->out, "Dataset file to write (safetensors)")->required();
-  gen->add_option("--episodes", o->episodes, "Episodes, each in a world of its own")->capture_default_str();
-  gen->add_option("--seed", o->seed, "First seed; episode i uses seed + i (none may fall in 1000-1999)")
-      ->capture_default_str();
-  gen->add_option("--duration", o->duration, "Simulated seconds per episode")->capture_default_str();
-  gen->add_option("--worlds", o->worlds, "World kinds, used in turn: forest, boxes, mixed, dynamic")
-      ->delimiter(',')
-      ->capture_default_str();
-  gen->add_option("--speeds", o->speeds, "Target top speeds (m/s), used in turn after every world kind")
-      ->delimiter(',')
-      ->capture_default_str();
-  gen->add_option("--label-every", o->label_every, "Label one planning cycle in this many")->capture_default_str();
-  std::string names = join(planners::planner_names(), ", ");
-  gen->add_option("--driver", o->driver,
-                  "Who drives: expert (the labeller itself), or a planner (" + names +
-                      ") while the expert labels (DAgger with a learned planner and --model)")
-      ->capture_default_str();
-  gen->add_option("--model", o->model, "Model file of a learned --driver");
-  gen->add_option("--jobs", o->jobs, "Episodes run at the same time (default: every hardware thread)")
-      ->capture_default_str();
-  gen->add_option("--expert-samples", o->expert_samples, "Expert's samples per CEM iteration")->capture_default_str();
-  gen->add_option("--expert-iterations", o->expert_iterations, "Expert's CEM iterations")->capture_default_str();
-  gen->callback([o, &exit_code]() {
-    try {
-      exit_code = generate(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack dataset generate: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
-
-  auto info_path = std::make_shared<std::string>();
-  CLI::App* inf = dataset->add_subcommand("info", "Print a dataset's rows, metadata, tensor shapes and statistics");
+  auto [inf, info_path] =
+      add_command<std::string>(*dataset, "info", "Print a dataset's rows, metadata, tensor shapes and statistics");
   inf->add_option("file", *info_path, "Dataset file (occtrack.dataset.v1)")->required();
-  inf->callback([info_path, &exit_code]() {
-    try {
-      exit_code = info(*info_path);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack dataset info: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(inf, exit_code, [info_path] { return info(*info_path); });
 
-  auto merge_out = std::make_shared<std::string>();
-  auto merge_inputs = std::make_shared<std::vector<std::string>>();
-  CLI::App* mrg = dataset->add_subcommand(
-      "merge", "Concatenate datasets made with the same projection and perception settings (episodes renumbered)");
-  mrg->add_option("--out", *merge_out, "Dataset file to write")->required();
-  mrg->add_option("files", *merge_inputs, "Dataset files, in order")->required();
-  mrg->callback([merge_out, merge_inputs, &exit_code]() {
-    try {
-      exit_code = merge(*merge_out, *merge_inputs);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack dataset merge: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  auto [mrg, m] = add_command<MergeOptions>(
+      *dataset, "merge",
+      "Concatenate datasets made with the same projection and perception settings (episodes renumbered)");
+  mrg->add_option("--out", m->out, "Dataset file to write")->required();
+  mrg->add_option("files", m->inputs, "Dataset files, in order")->required();
+  set_command_body(mrg, exit_code, [m] { return merge(m->out, m->inputs); });
 }
 
 }  // namespace occtrack::app

@@ -1,53 +1,72 @@
 #include "occtrack/planners/follower.hpp"
 
-#include <chrono>
+#include <stdexcept>
 
-#include "context.hpp"
+#include "cycle.hpp"
 
 namespace occtrack::planners {
+
+bool FollowerSettings::validate(std::string* error) const {
+  try {
+    detail::check_cycle_settings("", projection, ranking);
+  } catch (const std::invalid_argument& e) {
+    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
+    return false;
+  }
+  return true;
+}
+
+namespace {
+const FollowerSettings& checked(const FollowerSettings& s) {
+  std::string error;
+  if (!s.validate(&error)) throw std::invalid_argument("follower: " + error);
+  return s;
+}
+}  // namespace
 
 struct Follower::Impl {
   detail::Context context;
   projection::Projector<float> projector;
   projection::Problem<float> problem;
   projection::Result<float> result;
-  detail::Frame frame;
+  PlanRecord record;  // record.frame is the cycle's frame
+  Eigen::RowVectorXd line;
 
   explicit Impl(const FollowerSettings& s)
-      : context(s.projection, perception::Settings{}, s.ranking),
+      : context(checked(s).projection, perception::Settings{}, s.ranking),
         projector(s.projection),
         problem(projector.make_problem()),
-        result(projector.make_result()) {}
+        result(projector.make_result()) {
+    line.resize(2 * s.projection.coefficients());
+    record.xi.resize(line.size());
+  }
 };
 
 Follower::Follower(const FollowerSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
 Follower::~Follower() = default;
-void Follower::reset() { impl_->context.reset(); }
+void Follower::reset() {
+  impl_->context.reset();
+  impl_->record.valid = false;
+}
+const PlanRecord& Follower::last_record() const { return impl_->record; }
 
-PlannerOutput Follower::plan(const PlannerInput& input) {
-  const auto start = std::chrono::steady_clock::now();
-  PlannerOutput out;
+void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
+  const detail::CycleClock clock;
   auto& s = *impl_;
+  Frame& frame = s.record.frame;
   std::string error;
-  if (!s.context.observe(input, s.frame, &error)) {
-    out.ok = false;
-    out.message = error;
-  } else {
-    const Eigen::RowVectorXd line = s.context.straight_line(s.context.goal(s.frame));
-    const Eigen::Vector2d terminal_velocity = s.frame.target.tail<2>();
-    s.context.fill_row(s.problem, 0, line, s.frame, &terminal_velocity);
-    if (!s.projector.solve(s.problem, s.result, &error) ||
-        s.result.status != projection::SolveStatus::solved) {
-      out.ok = false;
-      out.message = error.empty() ? "projection produced non-finite values" : error;
-    } else {
-      const Eigen::RowVectorXd xi = s.result.xi.row(0).cast<double>();
-      out.command_velocity = s.context.command(xi);
-      out.plan = s.context.world_positions(xi, s.frame);
-    }
-  }
-  out.compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return out;
+  if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
+  s.context.line_to_goal(frame, s.line);
+  const Eigen::Vector2d terminal_velocity = frame.target.tail<2>();
+  s.context.fill_row(s.problem, 0, s.line, frame, &terminal_velocity);
+  if (!s.projector.solve(s.problem, s.result, &error) || s.result.status != projection::SolveStatus::solved)
+    return detail::brake(out, s.record, clock, error.empty() ? "projection produced non-finite values" : error);
+  out.candidates.clear();
+  s.record.xi = s.result.xi.row(0).cast<double>();
+  // The follower does not rank; its record still carries what the ranking makes of its plan.
+  const RankingTerms terms =
+      s.context.ranking().evaluate(s.record.xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+  s.context.finish_plan(out, s.record, clock, s.record.xi, terms);
 }
 
 }  // namespace occtrack::planners

@@ -7,7 +7,8 @@
 #include <random>
 #include <stdexcept>
 
-#include "context.hpp"
+#include "../core/settings_checker.hpp"
+#include "cycle.hpp"
 #include "occtrack/projection/projector.hpp"
 
 #ifndef OCCTRACK_MODEL_DIR
@@ -24,6 +25,12 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+const LearnedPolicySettings& checked(const LearnedPolicySettings& s) {
+  std::string error;
+  if (!s.validate(&error)) throw std::invalid_argument("planner " + learned_planner_name(s.variant) + ": " + error);
+  return s;
+}
+
 // bc projects nothing, so it has no stop plan: unprojected, a stop is an instant halt the robot cannot follow.
 bool ranks_stop(const LearnedPolicySettings& s) { return s.rank_stop && s.variant != policy::Variant::bc; }
 
@@ -34,6 +41,7 @@ projection::Settings batch_settings(const LearnedPolicySettings& s) {
 }
 
 policy::Model load_model(const LearnedPolicySettings& s) {
+  checked(s);  // before reading a file that settings refuse anyway
   const std::string path = s.model_path.empty() ? default_model_path(s.variant) : s.model_path;
   const std::string planner = learned_planner_name(s.variant);
   std::error_code ec;
@@ -55,6 +63,20 @@ std::string learned_planner_name(policy::Variant variant) {
   return "?";
 }
 
+bool LearnedPolicySettings::validate(std::string* error) const {
+  occtrack::detail::SettingsChecker c;
+  c.require(batch >= 1, "batch (", batch, ") must be at least 1");
+  c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
+  if (!c.done(error)) return false;
+  try {
+    detail::check_cycle_settings("", batch_settings(*this), perception, ranking);
+  } catch (const std::invalid_argument& e) {
+    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
+    return false;
+  }
+  return true;
+}
+
 std::string default_model_path(policy::Variant variant) {
   return std::string(OCCTRACK_MODEL_DIR) + "/" + policy::to_string(variant) + ".safetensors";
 }
@@ -66,7 +88,7 @@ struct LearnedPolicy::Impl {
   std::optional<projection::Projector<float>> projector;  // none for bc
   projection::Problem<float> problem;
   projection::Result<float> result;
-  detail::Frame frame;
+  PlanRecord record;  // record.frame is the cycle's frame
   std::mt19937_64 rng;
   std::normal_distribution<double> normal{0.0, 1.0};
   Timing timing;
@@ -77,7 +99,7 @@ struct LearnedPolicy::Impl {
   Eigen::VectorXf observation, features;
   policy::Rows z, outputs;
   Eigen::RowVectorXf robot_velocity, target, obstacles;
-  Eigen::RowVectorXd xi, nominal;
+  Eigen::RowVectorXd xi, nominal, line;
   std::vector<double> costs;
   std::vector<char> usable;
   // The last plan (robot-centric at last_origin), for keep_last_plan.
@@ -87,13 +109,9 @@ struct LearnedPolicy::Impl {
   bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
-      : settings(s), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
+      : settings(checked(s)), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
     settings.rank_stop = ranks_stop(s);
     const std::string planner = learned_planner_name(s.variant);
-    if (s.batch < 1) throw std::invalid_argument("planner " + planner + ": batch must be at least 1");
-    if (s.candidates_kept < 0) throw std::invalid_argument("planner " + planner + ": candidates_kept must not be negative");
-    if (s.perception.nearest_count != s.projection.obstacles)
-      throw std::invalid_argument("planner " + planner + ": perception.nearest_count must equal projection.obstacles");
     model.require_variant(s.variant, planner);
     const projection::Settings p = batch_settings(s);
     model.check_projection(p);
@@ -129,6 +147,8 @@ struct LearnedPolicy::Impl {
     obstacles.resize(4 * p.obstacles);
     xi.resize(n2);
     nominal.resize(n2);
+    line.resize(n2);
+    record.xi.resize(n2);
     costs.resize(p.batch);
     usable.resize(p.batch);
     last.resize(n2);
@@ -143,8 +163,10 @@ struct LearnedPolicy::Impl {
     const policy::OutputLayout& y = model.layout();
     const int n2 = static_cast<int>(xi.size()), m = settings.projection.steps;
     const auto row = outputs.row(b);
+    const Frame& frame = record.frame;
     if (!row.allFinite()) {
-      context.fill_row(problem, b, context.straight_line(context.goal(frame)), frame);
+      context.line_to_goal(frame, line);
+      context.fill_row(problem, b, line, frame);
       return false;
     }
     if (settings.variant == policy::Variant::fixed_q) {
@@ -178,6 +200,7 @@ std::string LearnedPolicy::name() const { return learned_planner_name(impl_->set
 void LearnedPolicy::reset() {
   impl_->context.reset();
   impl_->has_last = false;
+  impl_->record.valid = false;
   impl_->rng.seed(impl_->settings.seed);
   impl_->normal.reset();
 }
@@ -185,8 +208,10 @@ void LearnedPolicy::reset() {
 const LearnedPolicy::Timing& LearnedPolicy::last_timing() const { return impl_->timing; }
 const policy::Model& LearnedPolicy::model() const { return impl_->model; }
 const LearnedPolicy::Choice& LearnedPolicy::last_choice() const { return impl_->choice; }
+const PlanRecord& LearnedPolicy::last_record() const { return impl_->record; }
 
-PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
+void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
+  const detail::CycleClock clock;
   const auto start = Clock::now();
   Impl& s = *impl_;
   const LearnedPolicySettings& cfg = s.settings;
@@ -197,32 +222,24 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   const bool warm = cfg.keep_last_plan && s.has_last;
   const int stop_row = B + (cfg.keep_last_plan ? 1 : 0);
   const int rows = stop_row + (cfg.rank_stop ? 1 : 0);
-  PlannerOutput out;
   std::string error;
   s.timing = Timing{};
   s.choice = Choice{};
-  auto finish = [&]() {
-    out.compute_ms = ms_between(start, Clock::now());
-    s.timing.total = out.compute_ms;
-    return std::move(out);
-  };
   auto brake = [&](const std::string& message) {
     s.has_last = false;
-    out.ok = false;
-    out.message = name() + ": " + message;
-    out.command_velocity.setZero();
-    return finish();
+    detail::brake(out, s.record, clock, name() + ": " + message);
+    s.timing.total = out.compute_ms;
   };
 
   // 1. Observation (robot-centric).
-  if (!s.context.observe(input, s.frame, &error)) return brake(error);
+  if (!s.context.observe(input, s.record.frame, &error)) return brake(error);
   const auto observed = Clock::now();
   s.timing.perception = ms_between(start, observed);
 
   // 2. PointNet on the distinct points: the cloud's rows past them repeat its first row, which changes no
   //    max-pooled feature (perception.hpp, fixed cloud).
-  const auto& frame = s.frame;
-  const Eigen::Index distinct = std::max<Eigen::Index>(1, std::min(frame.occluders.rows(), frame.cloud.rows()));
+  const Frame& frame = s.record.frame;
+  const Eigen::Index distinct = std::max<Eigen::Index>(1, std::min<Eigen::Index>(frame.occluder_count, frame.cloud.rows()));
   s.cloud.topRows(distinct) = frame.cloud.topRows(distinct).cast<float>();
   s.model.features(s.cloud.topRows(distinct), s.features);
   const auto encoded = Clock::now();
@@ -246,8 +263,10 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
   }
   if (cfg.keep_last_plan) {
     // Without a last plan the row repeats the straight line to the goal and is not ranked.
-    s.warm = warm ? s.context.shift(s.last, frame.time - s.last_time, s.last_origin - frame.origin)
-                  : s.context.straight_line(s.context.goal(frame));
+    if (warm)
+      s.context.shift(s.last, frame.time - s.last_time, s.last_origin - frame.origin, s.warm);
+    else
+      s.context.line_to_goal(frame, s.warm);
     if (project) s.context.fill_row(s.problem, B, s.warm, frame);
     s.usable[B] = warm && s.warm.allFinite();
   }
@@ -280,13 +299,19 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
     return s.xi;
   };
   int best = -1;
+  RankingTerms best_terms;
   for (int b = 0; b < rows; ++b) {
     s.costs[b] = INFINITY;
     if (!s.usable[b]) continue;
     const Eigen::RowVectorXd& xi = candidate(b);
     if (!xi.allFinite()) continue;
-    s.costs[b] = s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders, frame.scan).total;
-    if (std::isfinite(s.costs[b]) && (best < 0 || s.costs[b] < s.costs[best])) best = b;
+    const RankingTerms terms =
+        s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+    s.costs[b] = terms.total;
+    if (std::isfinite(s.costs[b]) && (best < 0 || s.costs[b] < s.costs[best])) {
+      best = b;
+      best_terms = terms;
+    }
   }
   if (best < 0) {
     s.timing.ranking = ms_between(projected, Clock::now());
@@ -295,19 +320,19 @@ PlannerOutput LearnedPolicy::plan(const PlannerInput& input) {
 
   // 7. Command and the world-frame plan.
   s.choice = Choice{best, s.costs[best], cfg.keep_last_plan && best == B, cfg.rank_stop && best == stop_row};
-  const Eigen::RowVectorXd& plan = candidate(best);
-  out.command_velocity = s.context.command(plan);
-  out.plan = s.context.world_positions(plan, frame);
-  s.last = plan;
+  s.last = candidate(best);
   s.last_origin = frame.origin;
   s.last_time = frame.time;
   s.has_last = true;
   const int kept = std::min(cfg.candidates_kept, B);
-  out.candidates.reserve(kept);
-  for (int b = 0; b < kept; ++b)
-    if (s.usable[b] && std::isfinite(s.costs[b])) out.candidates.push_back(s.context.world_positions(candidate(b), frame));
+  std::size_t shown = 0;
+  for (int b = 0; b < kept; ++b) shown += s.usable[b] && std::isfinite(s.costs[b]);
+  out.candidates.resize(shown);  // storage of earlier cycles is reused
+  for (int b = 0, c = 0; b < kept; ++b)
+    if (s.usable[b] && std::isfinite(s.costs[b])) s.context.world_positions(candidate(b), frame, out.candidates[c++]);
   s.timing.ranking = ms_between(projected, Clock::now());
-  return finish();
+  s.context.finish_plan(out, s.record, clock, s.last, best_terms);
+  s.timing.total = out.compute_ms;
 }
 
 }  // namespace occtrack::planners

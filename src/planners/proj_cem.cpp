@@ -1,12 +1,13 @@
 #include "occtrack/planners/proj_cem.hpp"
 
 #include <algorithm>
-#include <chrono>
+#include <cmath>
 #include <numeric>
 #include <random>
 #include <stdexcept>
 
-#include "context.hpp"
+#include "../core/settings_checker.hpp"
+#include "cycle.hpp"
 #include "occtrack/projection/projector.hpp"
 
 namespace occtrack::planners {
@@ -21,12 +22,40 @@ ProjCemSettings ProjCemSettings::offline_expert(int threads) {
 }
 
 namespace {
+
+// The projection runs every sample of a CEM iteration as one batch.
 projection::Settings batch_settings(const ProjCemSettings& s) {
   projection::Settings p = s.projection;
   p.batch = s.samples;
   return p;
 }
+
+const ProjCemSettings& checked(const ProjCemSettings& s) {
+  std::string error;
+  if (!s.validate(&error)) throw std::invalid_argument("projcem: " + error);
+  return s;
+}
+
 }  // namespace
+
+bool ProjCemSettings::validate(std::string* error) const {
+  occtrack::detail::SettingsChecker c;
+  c.require(samples >= 4, "samples (", samples, ") must be at least 4");
+  c.require(cem_iterations >= 1, "cem_iterations (", cem_iterations, ") must be at least 1");
+  c.require(std::isfinite(elite_fraction) && elite_fraction > 0.0 && elite_fraction <= 1.0,
+            "elite_fraction must lie in (0, 1], got ", elite_fraction);
+  c.non_negative(initial_std, "initial_std");
+  c.non_negative(min_std, "min_std");
+  c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
+  if (!c.done(error)) return false;
+  try {
+    detail::check_cycle_settings("", batch_settings(*this), perception, ranking);
+  } catch (const std::invalid_argument& e) {
+    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
+    return false;
+  }
+  return true;
+}
 
 struct ProjCem::Impl {
   ProjCemSettings settings;
@@ -34,26 +63,30 @@ struct ProjCem::Impl {
   projection::Projector<float> projector;
   projection::Problem<float> problem;
   projection::Result<float> result;
-  detail::Frame frame;
+  PlanRecord record;  // record.frame is the cycle's frame
   std::mt19937_64 rng;
   Eigen::RowVectorXd previous;  // last plan, robot-centric at previous_origin
   Eigen::Vector2d previous_origin = Eigen::Vector2d::Zero();
   double previous_time = 0.0;
   bool has_previous = false;
+  // Per-cycle buffers, sized once.
+  Eigen::RowVectorXd line, mean, stddev, sample, best, scored, elite_mean, variance;
+  std::vector<double> costs;
+  std::vector<int> order;
 
   explicit Impl(const ProjCemSettings& s)
-      : settings(s),
+      : settings(checked(s)),
         context(batch_settings(s), s.perception, s.ranking),
         projector(batch_settings(s)),
         problem(projector.make_problem()),
         result(projector.make_result()),
         rng(s.seed) {
-    if (s.samples < 4) throw std::invalid_argument("projcem: samples must be at least 4");
-    if (s.cem_iterations < 1) throw std::invalid_argument("projcem: cem_iterations must be at least 1");
-    if (!(s.elite_fraction > 0.0 && s.elite_fraction <= 1.0))
-      throw std::invalid_argument("projcem: elite_fraction must be in (0, 1]");
-    if (s.perception.nearest_count != s.projection.obstacles)
-      throw std::invalid_argument("projcem: perception.nearest_count must equal projection.obstacles");
+    const int n2 = 2 * s.projection.coefficients();
+    for (Eigen::RowVectorXd* v : {&previous, &line, &mean, &stddev, &sample, &best, &scored, &elite_mean, &variance})
+      v->resize(n2);
+    record.xi.resize(n2);
+    costs.resize(s.samples);
+    order.resize(s.samples);
   }
 };
 
@@ -63,97 +96,84 @@ ProjCem::~ProjCem() = default;
 void ProjCem::reset() {
   impl_->context.reset();
   impl_->has_previous = false;
+  impl_->record.valid = false;
   impl_->rng.seed(impl_->settings.seed);
 }
 
-PlannerOutput ProjCem::plan(const PlannerInput& input) {
-  const auto start = std::chrono::steady_clock::now();
+const PlanRecord& ProjCem::last_record() const { return impl_->record; }
+
+void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
+  const detail::CycleClock clock;
   auto& s = *impl_;
   const auto& cfg = s.settings;
-  PlannerOutput out;
+  Frame& frame = s.record.frame;
   std::string error;
-  auto finish = [&]() {
-    out.compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return out;
-  };
-  if (!s.context.observe(input, s.frame, &error)) {
-    out.ok = false;
-    out.message = error;
-    return finish();
-  }
+  if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
   const int n = cfg.projection.coefficients(), B = cfg.samples;
-  const Eigen::RowVectorXd line = s.context.straight_line(s.context.goal(s.frame));
+  s.context.line_to_goal(frame, s.line);
 
   // The distribution: mean from the previous plan when there is one, else the straight line to the goal.
-  Eigen::RowVectorXd mean = s.has_previous ? s.context.shift(s.previous, s.frame.time - s.previous_time,
-                                                             s.previous_origin - s.frame.origin)
-                                           : line;
-  Eigen::RowVectorXd stddev(2 * n);
-  for (int i = 0; i < n; ++i) stddev(i) = stddev(n + i) = cfg.initial_std * double(i) / cfg.projection.degree;
+  if (s.has_previous)
+    s.context.shift(s.previous, frame.time - s.previous_time, s.previous_origin - frame.origin, s.mean);
+  else
+    s.mean = s.line;
+  for (int i = 0; i < n; ++i) s.stddev(i) = s.stddev(n + i) = cfg.initial_std * double(i) / cfg.projection.degree;
 
   std::normal_distribution<double> normal(0.0, 1.0);
-  std::vector<double> costs(B);
-  std::vector<int> order(B);
-  Eigen::RowVectorXd best = line;
+  s.best = s.line;
   double best_cost = INFINITY;
+  RankingTerms best_terms;
   const int elites = std::max(2, static_cast<int>(cfg.elite_fraction * B));
-  Eigen::RowVectorXd sample(2 * n);
   for (int iteration = 0; iteration < cfg.cem_iterations; ++iteration) {
     for (int b = 0; b < B; ++b) {
       if (b == 0) {
-        sample = mean;  // keep the distribution's centre, and the straight line, among the candidates
+        s.sample = s.mean;  // keep the distribution's centre, and the straight line, among the candidates
       } else if (b == 1 && iteration == 0) {
-        sample = line;
+        s.sample = s.line;
       } else {
-        for (int i = 0; i < 2 * n; ++i) sample(i) = mean(i) + stddev(i) * normal(s.rng);
+        for (int i = 0; i < 2 * n; ++i) s.sample(i) = s.mean(i) + s.stddev(i) * normal(s.rng);
       }
-      s.context.fill_row(s.problem, b, sample, s.frame);
+      s.context.fill_row(s.problem, b, s.sample, frame);
     }
-    if (!s.projector.solve(s.problem, s.result, &error)) {
-      out.ok = false;
-      out.message = error;
-      return finish();
-    }
+    if (!s.projector.solve(s.problem, s.result, &error)) return detail::brake(out, s.record, clock, error);
     for (int b = 0; b < B; ++b) {
-      costs[b] = s.context.ranking()
-                     .evaluate(s.result.xi.row(b).cast<double>(), s.frame.target, s.frame.nearest, s.frame.occluders,
-                               s.frame.scan)
-                     .total;
+      s.scored = s.result.xi.row(b).cast<double>();
+      const RankingTerms terms =
+          s.context.ranking().evaluate(s.scored, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+      s.costs[b] = terms.total;
+      if (terms.total < best_cost) {
+        best_cost = terms.total;
+        best_terms = terms;
+        s.best = s.scored;
+      }
     }
-    std::iota(order.begin(), order.end(), 0);
-    std::partial_sort(order.begin(), order.begin() + elites, order.end(),
-                      [&](int a, int b) { return costs[a] < costs[b]; });
-    if (costs[order[0]] < best_cost) {
-      best_cost = costs[order[0]];
-      best = s.result.xi.row(order[0]).cast<double>();
-    }
+    std::iota(s.order.begin(), s.order.end(), 0);
+    std::partial_sort(s.order.begin(), s.order.begin() + elites, s.order.end(),
+                      [&](int a, int b) { return s.costs[a] < s.costs[b]; });
     // Refit on the projected elites.
-    Eigen::RowVectorXd elite_mean = Eigen::RowVectorXd::Zero(2 * n);
-    for (int e = 0; e < elites; ++e) elite_mean += s.result.xi.row(order[e]).cast<double>();
-    elite_mean /= elites;
-    Eigen::RowVectorXd variance = Eigen::RowVectorXd::Zero(2 * n);
+    s.elite_mean.setZero();
+    for (int e = 0; e < elites; ++e) s.elite_mean += s.result.xi.row(s.order[e]).cast<double>();
+    s.elite_mean /= elites;
+    s.variance.setZero();
     for (int e = 0; e < elites; ++e)
-      variance += (s.result.xi.row(order[e]).cast<double>() - elite_mean).array().square().matrix();
-    mean = elite_mean;
-    stddev = (variance / elites).array().sqrt().max(cfg.min_std).matrix();
+      s.variance += (s.result.xi.row(s.order[e]).cast<double>() - s.elite_mean).array().square().matrix();
+    s.mean = s.elite_mean;
+    s.stddev = (s.variance / elites).array().sqrt().max(cfg.min_std).matrix();
   }
 
-  if (!std::isfinite(best_cost)) {
-    out.ok = false;
-    out.message = "no finite candidate";
-    return finish();
-  }
-  out.command_velocity = s.context.command(best);
-  out.plan = s.context.world_positions(best, s.frame);
-  const int kept = std::min(cfg.candidates_kept, B);
+  if (!std::isfinite(best_cost)) return detail::brake(out, s.record, clock, "no finite candidate");
   // The last iteration's samples, projected, as the figures' "candidates".
-  for (int c = 0; c < kept; ++c)
-    out.candidates.push_back(s.context.world_positions(s.result.xi.row(c).cast<double>(), s.frame));
-  s.previous = best;
-  s.previous_origin = s.frame.origin;
-  s.previous_time = s.frame.time;
+  const int kept = std::min(cfg.candidates_kept, B);
+  out.candidates.resize(static_cast<std::size_t>(kept));
+  for (int c = 0; c < kept; ++c) {
+    s.scored = s.result.xi.row(c).cast<double>();
+    s.context.world_positions(s.scored, frame, out.candidates[static_cast<std::size_t>(c)]);
+  }
+  s.previous = s.best;
+  s.previous_origin = frame.origin;
+  s.previous_time = frame.time;
   s.has_previous = true;
-  return finish();
+  s.context.finish_plan(out, s.record, clock, s.best, best_terms);
 }
 
 }  // namespace occtrack::planners

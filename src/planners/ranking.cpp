@@ -2,15 +2,54 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
+#include "../core/settings_checker.hpp"
 #include "occtrack/occlusion/line_of_sight.hpp"
 
 namespace occtrack::planners {
 
+bool RankingSettings::validate(std::string* error) const {
+  occtrack::detail::SettingsChecker c;
+  c.non_negative(occlusion_weight, "occlusion_weight");
+  c.non_negative(tracking_weight, "tracking_weight");
+  c.non_negative(smoothness_weight, "smoothness_weight");
+  c.non_negative(violation_weight, "violation_weight");
+  c.positive(occlusion_margin, "occlusion_margin");
+  c.require(occlusion_stride >= 1, "occlusion_stride (", occlusion_stride, ") must be at least 1");
+  c.share(late_occlusion_weight, "late_occlusion_weight");
+  c.non_negative(shadow_weight, "shadow_weight");
+  c.non_negative(shadow_horizon, "shadow_horizon");
+  c.positive(shadow_depth_cap, "shadow_depth_cap");
+  c.non_negative(near_weight, "near_weight");
+  c.non_negative(near_horizon, "near_horizon");
+  c.non_negative(near_clearance, "near_clearance");
+  c.positive(band.min, "band.min");
+  c.finite(band.reference, "band.reference");
+  c.finite(band.max, "band.max");
+  c.range(band.min, band.reference, "band.min", "band.reference");
+  c.range(band.reference, band.max, "band.reference", "band.max");
+  return c.done(error);
+}
+
+namespace {
+const RankingSettings& checked(const RankingSettings& settings) {
+  std::string error;
+  if (!settings.validate(&error)) throw std::invalid_argument("ranking: " + error);
+  return settings;
+}
+}  // namespace
+
 Ranking::Ranking(const RankingSettings& settings, const projection::Settings& projection)
-    : settings_(settings),
+    : settings_(checked(settings)),
       projection_(projection),
       basis_(core::bernstein_basis(projection.degree, projection.steps, projection.horizon)) {
+  const int m = projection.steps;
+  const int n = projection.coefficients();
+  positions_.resize(m, 2);
+  targets_.resize(m, 2);
+  for (Eigen::VectorXd* v : {&cx_, &cy_}) v->resize(n);
+  for (Eigen::VectorXd* v : {&px_, &py_, &vx_, &vy_, &ax_, &ay_}) v->resize(m);
   occlusion_weights_.resize(projection.steps);
   for (int k = 0; k < projection.steps; ++k) {
     const double s = basis_.times(k) / projection.horizon;
@@ -47,16 +86,24 @@ double shadow_depth(const Eigen::MatrixX2d& positions, int last, int stride, con
 
 }  // namespace
 
-RankingTerms Ranking::evaluate(const Eigen::RowVectorXd& xi_row, const Eigen::Vector4d& target, const PointRows& collision_points,
-                               const PointRows& occlusion_points, const core::Scan* scan) const {
+RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_row, const Eigen::Vector4d& target,
+                               const Eigen::Ref<const PointRows>& collision_points,
+                               const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan) const {
   const int n = projection_.coefficients(), m = projection_.steps;
-  const Eigen::VectorXd cx = xi_row.head(n).transpose();
-  const Eigen::VectorXd cy = xi_row.tail(n).transpose();
-  Eigen::MatrixX2d positions(m, 2), targets(m, 2);
-  positions.col(0) = basis_.P * cx;
-  positions.col(1) = basis_.P * cy;
-  const Eigen::VectorXd vx = basis_.Pd * cx, vy = basis_.Pd * cy;
-  const Eigen::VectorXd ax = basis_.Pdd * cx, ay = basis_.Pdd * cy;
+  // The same products, in the same kind of buffers, as a fresh evaluation would use (results bit for bit).
+  Eigen::VectorXd &cx = cx_, &cy = cy_, &vx = vx_, &vy = vy_, &ax = ax_, &ay = ay_;
+  cx = xi_row.head(n).transpose();
+  cy = xi_row.tail(n).transpose();
+  Eigen::MatrixX2d& positions = positions_;
+  Eigen::MatrixX2d& targets = targets_;
+  px_.noalias() = basis_.P * cx;
+  py_.noalias() = basis_.P * cy;
+  positions.col(0) = px_;
+  positions.col(1) = py_;
+  vx.noalias() = basis_.Pd * cx;
+  vy.noalias() = basis_.Pd * cy;
+  ax.noalias() = basis_.Pdd * cx;
+  ay.noalias() = basis_.Pdd * cy;
   targets.col(0) = target(0) + target(2) * basis_.times.array();
   targets.col(1) = target(1) + target(3) * basis_.times.array();
 

@@ -139,8 +139,6 @@ bool DemonstrationSettings::validate(std::string* error) const {
 
 namespace {
 
-json projection_json(const projection::Settings& p) { return json::parse(io::projection_settings_json(p)); }
-
 json perception_json(const perception::Settings& p) {
   return json{{"voxel_size", p.voxel_size},
               {"cloud_size", p.cloud_size},
@@ -184,8 +182,8 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                        {"physics_step", s.episode.physics_step},
                        {"planning_period", s.episode.planning_period},
                        {"robot_accel_max", s.episode.robot_accel_max}};
-  return {{"format", kDatasetFormat},
-          {"projection", projection_json(s.expert.projection).dump()},
+  return {{"format", io::kDatasetFormat},
+          {"projection", io::projection_settings_json(s.expert.projection)},
           {"perception", perception_json(s.expert.perception).dump()},
           {"expert", expert.dump()},
           {"driver", driver_text(s)},
@@ -219,8 +217,6 @@ void add_counts(DemonstrationReport& total, const DemonstrationReport& part) {
   total.rows += part.rows;
   total.skipped_failed += part.skipped_failed;
   total.skipped_nonfinite += part.skipped_nonfinite;
-  total.skipped_fit += part.skipped_fit;
-  total.worst_fit_residual = std::max(total.worst_fit_residual, part.worst_fit_residual);
   total.expert_ms += part.expert_ms;
 }
 
@@ -293,7 +289,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
         planners::ProjCemSettings expert_settings = settings.expert;
         expert_settings.seed = seed;
         DemonstrationRecorder recorder(std::make_unique<planners::ProjCem>(expert_settings), make_driver(seed),
-                                       expert_settings, settings.label_every);
+                                       settings.label_every);
         EpisodeSettings episode = settings.episode;
         episode.seed = seed;
         episode.snapshots = 0;

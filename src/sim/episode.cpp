@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "occtrack/sim/metrics.hpp"
 #include "occtrack/sim/world.hpp"
 
 namespace occtrack::sim {
@@ -46,22 +47,14 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
       settings.snapshots > 0 ? std::max(plan_every, steps / settings.snapshots / plan_every * plan_every) : 0;
 
   EpisodeResult result;
-  core::EpisodeMetrics& m = result.metrics;
-  m.scenario = scenario.name;
-  m.planner = planner.name();
-  m.min_clearance_m = INFINITY;
-  m.acceleration.min = INFINITY;
+  EpisodeMetricsAccumulator metrics(scenario.name, planner.name(), dt, scenario.sensor.range, settings.band,
+                                    steps / plan_every + 1);
 
   Vec2 position = scenario.robot_position, velocity = scenario.robot_velocity;
   Vec2 command = velocity, pending_command = velocity;
   int pending_at = -1;  // physics step at which pending_command takes effect
-  bool in_collision = false;
-  double accel_sum = 0, distance_sum = 0;
-  int in_band = 0;
-  std::vector<double> compute;
-  compute.reserve(steps / plan_every + 1);
-  const double sensor_range = scenario.sensor.range;
   int next_progress = 0;
+  planners::PlannerOutput out;
 
   for (int step = 0; step <= steps; ++step) {
     const double t = step * dt;
@@ -69,19 +62,8 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
 
     // Metrics of the current state (exact geometry, physics-step resolution).
     const double clearance = world.clearance(position, t) - scenario.robot_radius;
-    m.min_clearance_m = std::min(m.min_clearance_m, clearance);
-    const bool colliding = clearance < 0.0;
     const bool occluded = world.segment_blocked(position, target, t);
-    const double distance = (target - position).norm();
-    if (step < steps) {
-      if (colliding) m.collision_time_s += dt;
-      if (occluded) m.occlusion_time_s += dt;
-      if (distance > sensor_range) m.target_out_of_range_s += dt;
-      distance_sum += distance;
-      in_band += distance >= settings.band.min && distance <= settings.band.max;
-    }
-    if (colliding && !in_collision) ++m.collisions;
-    in_collision = colliding;
+    metrics.add_state(clearance, occluded, (target - position).norm(), step == steps);
     if (step % settings.trace_stride == 0) {
       result.trace.time.push_back(t);
       result.trace.robot.push_back(position);
@@ -100,14 +82,11 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
       input.target_position = target;
       input.target_velocity = world.target_velocity(t);
       input.scan = &scan;
-      planners::PlannerOutput out = planner.plan(input);
-      ++m.cycles;
-      compute.push_back(out.compute_ms);
+      planner.plan(input, out);  // `out` is reused from cycle to cycle: its storage is not reallocated
       Vec2 next = out.command_velocity;
-      if (!out.ok || !next.allFinite()) {
-        ++m.planner_failures;
-        next = Vec2::Zero();  // brake: never pass a non-finite command on
-      }
+      const bool failed = !out.ok || !next.allFinite();
+      metrics.add_cycle(out.compute_ms, failed);
+      if (failed) next = Vec2::Zero();  // brake: never pass a non-finite command on
       if (settings.delay_by_compute) {
         pending_command = next;
         pending_at = step + static_cast<int>(std::ceil(out.compute_ms / 1000.0 / dt - 1e-9));
@@ -130,24 +109,14 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
     if (change.norm() > limit) change *= limit / change.norm();
     velocity += change;
     position += velocity * dt;
-    const double accel = change.norm() / dt;
-    accel_sum += accel;
-    m.acceleration.min = std::min(m.acceleration.min, accel);
-    m.acceleration.max = std::max(m.acceleration.max, accel);
+    metrics.add_acceleration(change.norm() / dt);
 
     if (progress && step >= next_progress) {
       progress(double(step) / steps);
       next_progress = step + static_cast<int>(std::round(1.0 / dt));
     }
   }
-  const int counted = std::max(1, steps);
-  m.duration_s = steps * dt;
-  m.success = m.occlusion_time_s == 0.0;
-  m.acceleration.mean = accel_sum / counted;
-  if (!std::isfinite(m.acceleration.min)) m.acceleration.min = 0;
-  m.compute_ms = core::summarize_timings(compute);
-  m.tracking_distance_mean_m = distance_sum / counted;
-  m.tracking_in_band_share = double(in_band) / counted;
+  result.metrics = metrics.finish();
   if (progress) progress(1.0);
   return result;
 }

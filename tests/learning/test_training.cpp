@@ -21,7 +21,7 @@
 #include "learning/trainer.hpp"
 #include "occtrack/io/error.hpp"
 #include "occtrack/io/safetensors.hpp"
-#include "planners/context.hpp"
+#include "planners/cycle.hpp"
 
 namespace fs = std::filesystem;
 using namespace occtrack;
@@ -385,7 +385,7 @@ TEST_F(Training, FixedQIsContextFillRow) {
   projection::Problem<float> problem;
   problem.resize(ps);
   for (int b = 0; b < 3; ++b) {
-    planners::detail::Frame frame;
+    planners::Frame frame;
     frame.robot_velocity = Eigen::Vector2d(observation[b][0].item<double>(), observation[b][1].item<double>());
     for (int k = 0; k < 4; ++k) frame.target(k) = observation[b][2 + k].item<double>();
     frame.nearest.resize(4, 4);

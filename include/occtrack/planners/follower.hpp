@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/planners/ranking.hpp"
@@ -17,16 +18,24 @@ struct FollowerSettings {
     s.batch = 1;
     return s;
   }();
-  RankingSettings ranking;  ///< only its tracking band is used
+  RankingSettings ranking;  ///< its tracking band sets the goal; the whole ranking scores the plan (PlanRecord)
+
+  /// True when the projection (batch 1 is what the follower projects) and ranking settings are valid;
+  /// otherwise false, and *error names the field and the rule ("projection.steps ...").
+  bool validate(std::string* error = nullptr) const;
+  bool operator==(const FollowerSettings&) const = default;
 };
 
 class Follower final : public Planner {
  public:
+  /// Throws std::invalid_argument "follower: <validate's message>" for unusable settings.
   explicit Follower(const FollowerSettings& settings = {});
   ~Follower() override;
   std::string name() const override { return "follower"; }
   void reset() override;
-  PlannerOutput plan(const PlannerInput& input) override;
+  using Planner::plan;
+  void plan(const PlannerInput& input, PlannerOutput& out) override;
+  const PlanRecord& last_record() const override;
 
  private:
   struct Impl;

@@ -40,6 +40,13 @@ struct LearnedPolicySettings {
   projection::Settings projection = projection::Settings::with_iterations(50);
   perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
+
+  /// True when batch >= 1, candidates_kept >= 0, and projection (with its batch set from the rows ranked),
+  /// perception and ranking are valid and agree (perception's nearest points are the optimizer's obstacles).
+  /// Otherwise false, and *error names the field and the rule, e.g. "batch (0) must be at least 1". The
+  /// model file is checked by the constructor.
+  bool validate(std::string* error = nullptr) const;
+  bool operator==(const LearnedPolicySettings&) const = default;
 };
 
 /// The planner's name for a variant: "cvae", "bc", "cvae-fixed-q".
@@ -62,10 +69,10 @@ class LearnedPolicy final : public Planner {
     bool stop = false;            ///< the row was the stop plan (rank_stop)
   };
 
-  /// Loads settings.model_path (default_model_path(variant) when empty). Throws io::InputError when the file
+  /// Checks the settings first (std::invalid_argument "planner NAME: <validate's message>"), then loads
+  /// settings.model_path (default_model_path(variant) when empty). Throws io::InputError when the file
   /// is missing (saying how to get one), refused by policy::Model, of another variant, or trained for other
-  /// projection, perception (cloud and nearest sizes) or band settings; std::invalid_argument for unusable
-  /// settings.
+  /// projection, perception (cloud and nearest sizes) or band settings.
   explicit LearnedPolicy(const LearnedPolicySettings& settings);
   /// With a model already loaded (tests, benchmarks); settings.model_path is ignored. Same checks.
   LearnedPolicy(const LearnedPolicySettings& settings, policy::Model model);
@@ -73,10 +80,10 @@ class LearnedPolicy final : public Planner {
 
   std::string name() const override;
   void reset() override;
-  /// One cycle. After the first call, the networks, the sampling and the projection allocate nothing; the
-  /// frame change (Context::observe), the ranking, fixed-q's nominal q (Context::fill_row) and the output
-  /// (plan, candidates) still do.
-  PlannerOutput plan(const PlannerInput& input) override;
+  using Planner::plan;
+  /// One cycle. Allocates nothing after the first cycles when `out` is reused (tests/test_allocation_count.cpp).
+  void plan(const PlannerInput& input, PlannerOutput& out) override;
+  const PlanRecord& last_record() const override;
 
   const Timing& last_timing() const;
   const policy::Model& model() const;

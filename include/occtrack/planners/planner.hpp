@@ -5,12 +5,14 @@
 // velocity command out; internally planners work in the robot-centric frame (a translation, no rotation).
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "occtrack/core/scan.hpp"
 #include "occtrack/core/scenario.hpp"
+#include "occtrack/planners/ranking.hpp"
 
 namespace occtrack::planners {
 
@@ -34,14 +36,52 @@ struct PlannerOutput {
   std::string message;
 };
 
+/// One cycle's robot-centric view, as perception and the frame change make it: the robot is at the origin,
+/// axes parallel to the world's.
+struct Frame {
+  Eigen::Vector2d robot_velocity = Eigen::Vector2d::Zero();
+  Eigen::Vector4d target = Eigen::Vector4d::Zero();  ///< x, y, vx, vy
+  PointRows nearest;    ///< the optimizer's obstacles, N x 4 (padded as perception pads)
+  /// Every distinct point that can block the view (x, y, vx, vy): the first `occluder_count` rows. The
+  /// storage keeps the cloud's size so that a cycle allocates nothing; use occluders_view().
+  PointRows occluders;
+  int occluder_count = 0;
+  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> cloud;  ///< perception's fixed cloud (PointNet input)
+  const core::Scan* scan = nullptr;  ///< the cycle's scan (valid during the cycle only), for the shadow term
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< the robot's world position
+  double time = 0.0;
+
+  Eigen::Ref<const PointRows> occluders_view() const { return occluders.topRows(occluder_count); }
+};
+
+/// What a planner decided in its last cycle, in its own terms: the frame it planned in, the coefficients of
+/// the plan it chose and that plan's ranking terms (with the scan: exactly the cost it ranked by). Training
+/// data is made from this record (sim::DemonstrationRecorder), so that a row holds the expert's own view.
+struct PlanRecord {
+  bool valid = false;       ///< false when the last cycle braked (no plan) or no cycle ran yet
+  Frame frame;
+  Eigen::RowVectorXd xi;    ///< coefficients, x then y, robot-centric (frame.origin)
+  RankingTerms terms;       ///< the ranking of xi in `frame`; terms.total is the planner's cost
+};
+
 class Planner {
  public:
   virtual ~Planner() = default;
   virtual std::string name() const = 0;
   /// Forget everything from previous calls (warm starts, velocity estimates); called at episode start.
   virtual void reset() = 0;
-  /// One planning cycle. Never throws for bad sensor data and never returns a non-finite command.
-  virtual PlannerOutput plan(const PlannerInput& input) = 0;
+  /// One planning cycle into `out`, whose storage is reused: given the same `out` every cycle, the planners
+  /// of this library allocate nothing after the first cycles (tests/test_allocation_count.cpp). Never throws
+  /// for bad sensor data and never leaves a non-finite command.
+  virtual void plan(const PlannerInput& input, PlannerOutput& out) = 0;
+  /// The same, into a fresh output (allocates).
+  PlannerOutput plan(const PlannerInput& input) {
+    PlannerOutput out;
+    plan(input, out);
+    return out;
+  }
+  /// The last cycle's record (valid = false before the first cycle and after a cycle that braked).
+  virtual const PlanRecord& last_record() const = 0;
 };
 
 /// Options shared by the planners that the command line exposes.

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/planner.hpp"
@@ -29,15 +30,27 @@ struct ProjCemSettings {
 
   /// The offline expert: 2000 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.
   static ProjCemSettings offline_expert(int threads);
+
+  /// True when every field is usable: samples at least 4 (and within the projection's batch bound),
+  /// cem_iterations at least 1, elite_fraction in (0, 1], spreads finite and >= 0, candidates_kept >= 0, and
+  /// projection (with batch = samples), perception and ranking valid and agreeing (perception's nearest points
+  /// are the optimizer's obstacles). Otherwise false, and *error names the field and the rule, e.g.
+  /// "samples (0) must be at least 4" or "ranking.occlusion_stride (0) must be at least 1".
+  bool validate(std::string* error = nullptr) const;
+  bool operator==(const ProjCemSettings&) const = default;
 };
 
 class ProjCem final : public Planner {
  public:
+  /// Throws std::invalid_argument "projcem: <validate's message>" for unusable settings.
   explicit ProjCem(const ProjCemSettings& settings = {});
   ~ProjCem() override;
   std::string name() const override { return "projcem"; }
   void reset() override;
-  PlannerOutput plan(const PlannerInput& input) override;
+  using Planner::plan;
+  /// One cycle; allocates nothing after the first cycles when `out` is reused.
+  void plan(const PlannerInput& input, PlannerOutput& out) override;
+  const PlanRecord& last_record() const override;
 
  private:
   struct Impl;

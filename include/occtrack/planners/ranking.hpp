@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "occtrack/core/bernstein.hpp"
@@ -36,25 +37,34 @@ struct RankingSettings {
   double near_clearance = 0.4;    ///< metres from an obstacle point to the robot centre: the optimizer's disk radius
   core::TrackingBand band;
 
+  /// True when every weight is finite and >= 0, every distance and horizon finite and >= 0 (the margin and
+  /// the shadow cap positive), the stride at least 1, late_occlusion_weight in [0, 1] and the band ordered
+  /// (0 < min <= reference <= max). Otherwise false, and *error names the field and the rule.
+  bool validate(std::string* error = nullptr) const;
   bool operator==(const RankingSettings&) const = default;
 };
 
+/// The terms of one plan's cost, unweighted, and their weighted sum `total` (infinite when not finite).
 struct RankingTerms {
   double occlusion = 0, tracking = 0, smoothness = 0, violation = 0, shadow = 0, near = 0, total = 0;
 };
 
 using PointRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
+/// Not safe to share between threads: evaluate() works in buffers sized at construction, so that it
+/// allocates nothing.
 class Ranking {
  public:
+  /// Throws std::invalid_argument with "ranking: <validate's message>" for unusable settings.
   Ranking(const RankingSettings& settings, const projection::Settings& projection);
 
   /// Costs of trajectories given as coefficient rows (x coefficients, then y), robot-centric. target:
   /// (x, y, vx, vy) robot-centric, predicted linearly. collision_points: the optimizer's obstacles (N x 4).
   /// occlusion_points: every point that can block the view (x, y, vx, vy). scan: the cycle's scan, taken
   /// at the robot-centric origin, for the shadow term (null: no shadow term).
-  RankingTerms evaluate(const Eigen::RowVectorXd& xi, const Eigen::Vector4d& target, const PointRows& collision_points,
-                        const PointRows& occlusion_points, const core::Scan* scan = nullptr) const;
+  RankingTerms evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Eigen::Vector4d& target,
+                        const Eigen::Ref<const PointRows>& collision_points,
+                        const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan = nullptr) const;
 
   const core::BernsteinBasis& basis() const { return basis_; }
 
@@ -63,6 +73,9 @@ class Ranking {
   projection::Settings projection_;
   core::BernsteinBasis basis_;
   Eigen::VectorXd occlusion_weights_;
+  // Workspaces of evaluate(), m rows each.
+  mutable Eigen::MatrixX2d positions_, targets_;
+  mutable Eigen::VectorXd cx_, cy_, px_, py_, vx_, vy_, ax_, ay_;
 };
 
 }  // namespace occtrack::planners

@@ -1,14 +1,47 @@
-#include "context.hpp"
+#include "cycle.hpp"
 
 #include <Eigen/QR>
 #include <cmath>
+#include <stdexcept>
 
 namespace occtrack::planners::detail {
+
+void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
+                          const RankingSettings& ranking) {
+  std::string error;
+  if (!projection.validate(&error)) throw std::invalid_argument(planner + ": projection." + error);
+  if (!ranking.validate(&error)) throw std::invalid_argument(planner + ": ranking." + error);
+}
+
+void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
+                          const perception::Settings& perception, const RankingSettings& ranking) {
+  check_cycle_settings(planner, projection, ranking);
+  std::string error;
+  if (!perception.validate(&error)) throw std::invalid_argument(planner + ": perception." + error);
+  if (perception.nearest_count != projection.obstacles)
+    throw std::invalid_argument(planner + ": perception.nearest_count (" + std::to_string(perception.nearest_count) +
+                                ") must equal projection.obstacles (" + std::to_string(projection.obstacles) + ")");
+}
+
+void finish(PlannerOutput& out, const CycleClock& clock) { out.compute_ms = clock.elapsed_ms(); }
+
+void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, const std::string& message) {
+  out.ok = false;
+  out.message = message;
+  out.command_velocity.setZero();
+  out.plan.clear();
+  out.candidates.clear();
+  record.valid = false;
+  finish(out, clock);
+}
 
 Context::Context(const projection::Settings& projection, const perception::Settings& perception,
                  const RankingSettings& ranking)
     : projection_(projection), ranking_settings_(ranking), perception_(perception), ranking_(ranking, projection) {
-  const int n = projection.coefficients();
+  const int n = projection.coefficients(), m = projection.steps;
+  for (Eigen::VectorXd* v : {&cx_, &cy_, &fit_x_, &fit_y_}) v->resize(n);
+  for (Eigen::VectorXd* v : {&x_, &y_}) v->resize(m);
+  shifted_.resize(m, 2);
   const double dt = std::min(0.1, projection.horizon);
   command_row_.resize(n);
   for (int i = 0; i < n; ++i)
@@ -37,9 +70,11 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
   frame.cloud = observation_.cloud;
   frame.scan = input.scan;
   // Occluders: the nearest points (with velocity estimates), then the rest of the distinct cloud points.
+  // The storage keeps the cloud's size (no reallocation from one cycle to the next).
   const int distinct = std::min<int>(observation_.voxels, static_cast<int>(observation_.cloud.rows()));
   const int near = std::min<int>(distinct, static_cast<int>(observation_.nearest.rows()));
-  frame.occluders.resize(distinct, 4);
+  if (frame.occluders.rows() < observation_.cloud.rows()) frame.occluders.resize(observation_.cloud.rows(), 4);
+  frame.occluder_count = distinct;
   frame.occluders.topRows(near) = observation_.nearest.topRows(near);
   for (int i = near; i < distinct; ++i) frame.occluders.row(i) << observation_.cloud(i, 0), observation_.cloud(i, 1), 0, 0;
   return true;
@@ -53,14 +88,21 @@ Eigen::Vector2d Context::goal(const Frame& frame) const {
 }
 
 Eigen::RowVectorXd Context::straight_line(const Eigen::Vector2d& end) const {
+  Eigen::RowVectorXd xi(2 * projection_.coefficients());
+  line_through(end, xi);
+  return xi;
+}
+
+void Context::line_to_goal(const Frame& frame, Eigen::RowVectorXd& out) const { line_through(goal(frame), out); }
+
+void Context::line_through(const Eigen::Vector2d& end, Eigen::RowVectorXd& xi) const {
   const int n = projection_.coefficients();
-  Eigen::RowVectorXd xi(2 * n);
+  xi.resize(2 * n);
   for (int i = 0; i < n; ++i) {
     const double s = double(i) / projection_.degree;  // Bernstein coefficients of a linear function
     xi(i) = s * end.x();
     xi(n + i) = s * end.y();
   }
-  return xi;
 }
 
 void Context::fill_row(projection::Problem<float>& problem, int b, const Eigen::RowVectorXd& xi_bar, const Frame& frame,
@@ -68,7 +110,9 @@ void Context::fill_row(projection::Problem<float>& problem, int b, const Eigen::
   const int n = projection_.coefficients(), m = projection_.steps;
   const auto& P = basis().P;
   const auto& Pd = basis().Pd;
-  const Eigen::VectorXd cx = xi_bar.head(n).transpose(), cy = xi_bar.tail(n).transpose();
+  Eigen::VectorXd &cx = cx_, &cy = cy_;
+  cx = xi_bar.head(n).transpose();
+  cy = xi_bar.tail(n).transpose();
   Eigen::Vector2d end_velocity = terminal_velocity ? *terminal_velocity
                                                    : Eigen::Vector2d(Pd.row(m - 1).dot(cx), Pd.row(m - 1).dot(cy));
   const double speed = end_velocity.norm();
@@ -89,7 +133,7 @@ void Context::fill_row(projection::Problem<float>& problem, int b, const Eigen::
     for (int f = 0; f < 4; ++f) problem.obstacles(b, 4 * j + f) = float(frame.nearest(j, f));
 }
 
-Eigen::Vector2d Context::command(const Eigen::RowVectorXd& xi) const {
+Eigen::Vector2d Context::command(const Eigen::Ref<const Eigen::RowVectorXd>& xi) const {
   const int n = projection_.coefficients();
   Eigen::Vector2d v(command_row_.dot(xi.head(n)), command_row_.dot(xi.tail(n)));
   if (!v.allFinite()) return Eigen::Vector2d::Zero();
@@ -98,18 +142,32 @@ Eigen::Vector2d Context::command(const Eigen::RowVectorXd& xi) const {
   return v;
 }
 
-std::vector<Vec2> Context::world_positions(const Eigen::RowVectorXd& xi, const Frame& frame) const {
+void Context::world_positions(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Frame& frame,
+                              std::vector<Vec2>& out) const {
   const int n = projection_.coefficients();
-  const Eigen::VectorXd x = basis().P * xi.head(n).transpose(), y = basis().P * xi.tail(n).transpose();
-  std::vector<Vec2> out(x.size());
-  for (Eigen::Index k = 0; k < x.size(); ++k) out[k] = frame.origin + Vec2(x(k), y(k));
-  return out;
+  x_.noalias() = basis().P * xi.head(n).transpose();
+  y_.noalias() = basis().P * xi.tail(n).transpose();
+  out.resize(static_cast<std::size_t>(x_.size()));
+  for (Eigen::Index k = 0; k < x_.size(); ++k) out[k] = frame.origin + Vec2(x_(k), y_(k));
 }
 
-Eigen::RowVectorXd Context::shift(const Eigen::RowVectorXd& xi, double dt, const Eigen::Vector2d& offset) const {
+void Context::finish_plan(PlannerOutput& out, PlanRecord& record, const CycleClock& clock,
+                          const Eigen::Ref<const Eigen::RowVectorXd>& xi, const RankingTerms& terms) const {
+  out.ok = true;
+  out.message.clear();
+  out.command_velocity = command(xi);
+  world_positions(xi, record.frame, out.plan);
+  if (record.xi.data() != xi.data()) record.xi = xi;
+  record.terms = terms;
+  record.valid = true;
+  finish(out, clock);
+}
+
+void Context::shift(const Eigen::RowVectorXd& xi, double dt, const Eigen::Vector2d& offset,
+                    Eigen::RowVectorXd& out) const {
   const int n = projection_.coefficients(), m = projection_.steps;
   const double T = projection_.horizon;
-  Eigen::MatrixX2d positions(m, 2);
+  Eigen::MatrixX2d& positions = shifted_;
   for (int k = 0; k < m; ++k) {
     const double s = std::min(1.0, (basis().times(k) + dt) / T);
     double x = 0, y = 0;
@@ -120,10 +178,11 @@ Eigen::RowVectorXd Context::shift(const Eigen::RowVectorXd& xi, double dt, const
     }
     positions.row(k) << x + offset.x(), y + offset.y();
   }
-  Eigen::RowVectorXd out(2 * n);
-  out.head(n) = (least_squares_ * positions.col(0)).transpose();
-  out.tail(n) = (least_squares_ * positions.col(1)).transpose();
-  return out;
+  fit_x_.noalias() = least_squares_ * positions.col(0);
+  fit_y_.noalias() = least_squares_ * positions.col(1);
+  out.resize(2 * n);
+  out.head(n) = fit_x_.transpose();
+  out.tail(n) = fit_y_.transpose();
 }
 
 }  // namespace occtrack::planners::detail

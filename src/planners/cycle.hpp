@@ -1,0 +1,114 @@
+// The planning cycle that every planner shares (private to src/planners): settings checks, the frame
+// change from a PlannerInput to the robot-centric Frame, the nominal constraint parameters q, the conversions
+// between coefficients, commands and the world frame, braking, and the cycle's timing.
+//
+//   detail::CycleClock clock;                                   // at the top of plan()
+//   if (!context.observe(input, record.frame, &error)) return detail::brake(out, record, clock, name() + ": " + error);
+//   ...
+//   context.finish_plan(out, record, clock, xi, terms);         // command, world plan, record, timing
+//
+// Every function here allocates nothing once `out` and the record have been through a cycle.
+#pragma once
+
+#include <Eigen/Core>
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "occtrack/core/bernstein.hpp"
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/planners/ranking.hpp"
+#include "occtrack/projection/projector.hpp"
+
+namespace occtrack::planners::detail {
+
+/// Throws std::invalid_argument "PLANNER: FIELD ..." when the projection, perception or ranking settings
+/// are unusable or do not fit together (perception's nearest points are the optimizer's obstacles). Every
+/// planner calls it first in its constructor, before building anything from the settings.
+void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
+                          const perception::Settings& perception, const RankingSettings& ranking);
+/// The same for a planner without perception settings of its own (the follower).
+void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
+                          const RankingSettings& ranking);
+
+/// Wall time of one cycle, from construction.
+class CycleClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  CycleClock() : start_(Clock::now()) {}
+  double elapsed_ms() const { return ms_since(start_); }
+  static double ms_since(Clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+  }
+
+ private:
+  Clock::time_point start_;
+};
+
+/// The end of every cycle: out.compute_ms from the clock.
+void finish(PlannerOutput& out, const CycleClock& clock);
+/// A cycle without a usable plan: zero command, empty plan and candidates (storage kept), ok = false with
+/// `message`, the record invalidated, and finish().
+void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, const std::string& message);
+
+class Context {
+ public:
+  Context(const projection::Settings& projection, const perception::Settings& perception,
+          const RankingSettings& ranking);
+
+  /// Forgets perception's tracks (velocity estimates); called when an episode starts.
+  void reset() { perception_.reset(); }
+
+  /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state).
+  bool observe(const PlannerInput& input, Frame& frame, std::string* error);
+
+  /// The end of a cycle that chose `xi` (robot-centric in record.frame) with ranking `terms`: out's command
+  /// and world plan (candidates are left as they are), out.ok, the record, and finish(). xi may alias
+  /// record.xi.
+  void finish_plan(PlannerOutput& out, PlanRecord& record, const CycleClock& clock,
+                   const Eigen::Ref<const Eigen::RowVectorXd>& xi, const RankingTerms& terms) const;
+
+  /// Where the naive follower heads: the target's predicted position at the horizon's end, pulled back
+  /// towards the robot to the reference distance.
+  Eigen::Vector2d goal(const Frame& frame) const;
+  /// Coefficients (x then y) of a straight line from the origin to `end` at constant velocity (allocates).
+  Eigen::RowVectorXd straight_line(const Eigen::Vector2d& end) const;
+  /// The same into `xi` (resized to 2n).
+  void line_through(const Eigen::Vector2d& end, Eigen::RowVectorXd& xi) const;
+
+  /// Fills problem row b with the nominal q for nominal coefficients xi_bar: terminal state and via points
+  /// read off xi_bar (terminal speed clamped to speed_max, or `terminal_velocity` when given), lambda0 = 0,
+  /// the tracking band as distance bounds.
+  void fill_row(projection::Problem<float>& problem, int b, const Eigen::RowVectorXd& xi_bar, const Frame& frame,
+                const Eigen::Vector2d* terminal_velocity = nullptr) const;
+
+  /// The command of a plan: its mean velocity over the first 0.1 s, capped at speed_max; zero if not finite.
+  Eigen::Vector2d command(const Eigen::Ref<const Eigen::RowVectorXd>& xi) const;
+  /// World-frame positions of a plan, one per step, into `out` (resized to the steps).
+  void world_positions(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Frame& frame, std::vector<Vec2>& out) const;
+  /// Least-squares coefficients of a previous plan shifted by dt seconds and by `offset` metres (its frame's
+  /// origin minus the new one), so that it can seed the next cycle; into `out` (2n).
+  void shift(const Eigen::RowVectorXd& xi, double dt, const Eigen::Vector2d& offset, Eigen::RowVectorXd& out) const;
+  /// Straight line to the goal, into `out` (2n): straight_line(goal(frame)).
+  void line_to_goal(const Frame& frame, Eigen::RowVectorXd& out) const;
+
+  const projection::Settings& projection() const { return projection_; }
+  const Ranking& ranking() const { return ranking_; }
+  const core::BernsteinBasis& basis() const { return ranking_.basis(); }
+
+ private:
+  projection::Settings projection_;
+  RankingSettings ranking_settings_;
+  perception::Perception perception_;
+  perception::Observation observation_;
+  Ranking ranking_;
+  Eigen::RowVectorXd command_row_;      // (B(0.1) - B(0)) / 0.1
+  Eigen::MatrixXd least_squares_;       // n x m: pseudo-inverse of P
+  // Workspaces (fill_row, shift, world_positions), sized at construction.
+  mutable Eigen::VectorXd cx_, cy_, x_, y_;
+  mutable Eigen::MatrixX2d shifted_;
+  mutable Eigen::VectorXd fit_x_, fit_y_;
+};
+
+}  // namespace occtrack::planners::detail
