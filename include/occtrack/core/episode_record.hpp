@@ -1,5 +1,6 @@
 // What an episode leaves behind: its metrics (shared/spec/simulation.md, "Metrics") and a trace for
-// figures. Plain data, written by sim/episode and read by io/results and io/svg.
+// figures; and a suite's episodes with their summary. Plain data, made by sim/episode and sim/metrics, read
+// by io/results and io/svg.
 #pragma once
 
 #include <string>
@@ -30,6 +31,18 @@ struct EpisodeMetrics {
   double target_out_of_range_s = 0;  ///< target beyond the sensor's range
   int planner_failures = 0;          ///< cycles in which the planner returned no usable plan (the robot braked)
   int cycles = 0;
+};
+
+/// A suite's episodes and their summary (sim::summarize_suite makes it, io/results.hpp writes it).
+struct SuiteResult {
+  std::string suite, planner;
+  std::vector<EpisodeMetrics> episodes;
+  /// Over the episodes: times and counts summed; success_rate the share of successful episodes;
+  /// min_clearance_m and acceleration.min the minimum, maxima the maximum; acceleration.mean and the tracking
+  /// distance weighted by duration; compute_ms.mean weighted by cycles, compute_ms.median the median of the
+  /// episodes' medians, p99 and max the largest of the episodes'.
+  EpisodeMetrics summary;
+  double success_rate = 0.0;
 };
 
 struct Snapshot {

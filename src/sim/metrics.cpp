@@ -1,0 +1,108 @@
+// Episode and suite metrics (include/occtrack/sim/metrics.hpp).
+#include "occtrack/sim/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace occtrack::sim {
+
+EpisodeMetricsAccumulator::EpisodeMetricsAccumulator(const std::string& scenario, const std::string& planner,
+                                                     double physics_step, double sensor_range,
+                                                     const core::TrackingBand& band, int expected_cycles)
+    : physics_step_(physics_step), sensor_range_(sensor_range), band_(band) {
+  m_.scenario = scenario;
+  m_.planner = planner;
+  m_.min_clearance_m = std::numeric_limits<double>::infinity();
+  m_.acceleration.min = std::numeric_limits<double>::infinity();
+  compute_ms_.reserve(static_cast<std::size_t>(std::max(0, expected_cycles)));
+}
+
+void EpisodeMetricsAccumulator::add_state(double clearance, bool occluded, double distance, bool last) {
+  m_.min_clearance_m = std::min(m_.min_clearance_m, clearance);
+  const bool colliding = clearance < 0.0;
+  if (!last) {
+    ++steps_;
+    if (colliding) m_.collision_time_s += physics_step_;
+    if (occluded) m_.occlusion_time_s += physics_step_;
+    if (distance > sensor_range_) m_.target_out_of_range_s += physics_step_;
+    distance_sum_ += distance;
+    in_band_ += distance >= band_.min && distance <= band_.max;
+  }
+  if (colliding && !in_collision_) ++m_.collisions;
+  in_collision_ = colliding;
+}
+
+void EpisodeMetricsAccumulator::add_cycle(double compute_ms, bool failed) {
+  ++m_.cycles;
+  compute_ms_.push_back(compute_ms);
+  if (failed) ++m_.planner_failures;
+}
+
+void EpisodeMetricsAccumulator::add_acceleration(double norm) {
+  acceleration_sum_ += norm;
+  m_.acceleration.min = std::min(m_.acceleration.min, norm);
+  m_.acceleration.max = std::max(m_.acceleration.max, norm);
+}
+
+core::EpisodeMetrics EpisodeMetricsAccumulator::finish() const {
+  core::EpisodeMetrics m = m_;
+  const int counted = std::max(1, steps_);
+  m.duration_s = steps_ * physics_step_;
+  m.success = m.occlusion_time_s == 0.0;
+  m.acceleration.mean = acceleration_sum_ / counted;
+  if (!std::isfinite(m.acceleration.min)) m.acceleration.min = 0;
+  m.compute_ms = core::summarize_timings(compute_ms_);
+  m.tracking_distance_mean_m = distance_sum_ / counted;
+  m.tracking_in_band_share = double(in_band_) / counted;
+  return m;
+}
+
+core::SuiteResult summarize_suite(const std::string& suite, const std::string& planner,
+                                  const std::vector<core::EpisodeMetrics>& episodes) {
+  core::SuiteResult r;
+  r.suite = suite;
+  r.planner = planner;
+  r.episodes = episodes;
+  core::EpisodeMetrics& s = r.summary;
+  s.scenario = suite;
+  s.planner = planner;
+  if (episodes.empty()) return r;
+  s.min_clearance_m = std::numeric_limits<double>::infinity();
+  s.acceleration.min = std::numeric_limits<double>::infinity();
+  std::vector<double> medians;
+  double weighted_compute = 0;
+  int successes = 0;
+  for (const auto& e : episodes) {
+    s.duration_s += e.duration_s;
+    s.occlusion_time_s += e.occlusion_time_s;
+    s.collisions += e.collisions;
+    s.collision_time_s += e.collision_time_s;
+    s.min_clearance_m = std::min(s.min_clearance_m, e.min_clearance_m);
+    s.acceleration.mean += e.acceleration.mean * e.duration_s;
+    s.acceleration.min = std::min(s.acceleration.min, e.acceleration.min);
+    s.acceleration.max = std::max(s.acceleration.max, e.acceleration.max);
+    weighted_compute += e.compute_ms.mean * e.cycles;
+    medians.push_back(e.compute_ms.median);
+    s.compute_ms.p99 = std::max(s.compute_ms.p99, e.compute_ms.p99);
+    s.compute_ms.max = std::max(s.compute_ms.max, e.compute_ms.max);
+    s.tracking_distance_mean_m += e.tracking_distance_mean_m * e.duration_s;
+    s.tracking_in_band_share += e.tracking_in_band_share * e.duration_s;
+    s.target_out_of_range_s += e.target_out_of_range_s;
+    s.planner_failures += e.planner_failures;
+    s.cycles += e.cycles;
+    successes += e.success;
+  }
+  const double total = std::max(s.duration_s, 1e-12);
+  s.acceleration.mean /= total;
+  s.tracking_distance_mean_m /= total;
+  s.tracking_in_band_share /= total;
+  s.compute_ms.mean = s.cycles > 0 ? weighted_compute / s.cycles : 0.0;
+  s.compute_ms.median = core::summarize_timings(std::move(medians)).median;
+  r.success_rate = double(successes) / episodes.size();
+  s.success = successes == static_cast<int>(episodes.size());
+  return r;
+}
+
+}  // namespace occtrack::sim
