@@ -61,3 +61,32 @@ TEST(Conformance, LiteralReferenceReproducesEveryCase) {
     EXPECT_LE((solve_and_compare<double, projection::LiteralProjector>(c)), 1e-9);
   }
 }
+
+// residual_history: every implementation fills it when asked, its row means are the residual, and the two
+// Eigen implementations agree on it iteration by iteration, as on every other output.
+TEST(Conformance, ResidualHistoryIsFilledAndAgreesBetweenImplementations) {
+  const std::vector<std::string> files = case_files();
+  ASSERT_FALSE(files.empty());
+  io::ProjectionCase c = io::read_projection_case(files.front());
+  c.settings.record_residual_history = true;
+  const int B = c.settings.batch, K = c.settings.iterations;
+  auto solve = [&](auto&& solver) {
+    projection::Result<double> result;
+    result.resize(c.settings);
+    result.residual_history.setConstant(-1.0);  // a sentinel that no residual can take
+    std::string error;
+    EXPECT_TRUE(solver.solve(c.problem, result, &error)) << error;
+    return result;
+  };
+  const projection::Result<double> fast = solve(projection::Projector<double>(c.settings));
+  const projection::Result<double> literal = solve(projection::LiteralProjector<double>(c.settings));
+  for (const projection::Result<double>* r : {&fast, &literal}) {
+    ASSERT_EQ(r->residual_history.rows(), B);
+    ASSERT_EQ(r->residual_history.cols(), K);
+    EXPECT_GE(r->residual_history.minCoeff(), 0.0);
+    EXPECT_GT(r->residual_history.maxCoeff(), 0.0);
+    for (int b = 0; b < B; ++b) EXPECT_NEAR(r->residual_history.row(b).mean(), r->residual(b), 1e-12);
+  }
+  EXPECT_LE(test::worst_error(fast.residual_history, literal.residual_history), 1e-9);
+  EXPECT_LE(test::worst_error(literal.residual, c.expected->residual), 1e-9);
+}

@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+#include <stdexcept>
+
+#include "occtrack/core/bernstein.hpp"
+#include "occtrack/projection/kkt.hpp"
 #include "occtrack/projection/literal_projector.hpp"
 #include "occtrack/projection/problem_generator.hpp"
 #include "test_helpers.hpp"
@@ -155,4 +160,44 @@ TEST(Projector, ReportsNonFiniteOutcomeAsStatus) {
   const auto r = solve<float>(projector, s, problem);
   EXPECT_EQ(r.status, projection::SolveStatus::non_finite);
   EXPECT_STREQ(projection::to_string(r.status), "non_finite");
+}
+
+// The blocks of the inverse KKT matrices solve their systems (spec "Initial guess" and step 9): for step 9,
+// [[Q, A_eq'], [A_eq, 0]] [M11 M12; M21 M22] = I gives A_eq M11 = 0, A_eq M12 = I and Q M11 + A_eq' M21 = I,
+// so Q M11 - I has the columns of A_eq' (checked through the projector onto the null space of A_eq); for the
+// initial guess, A_init initial_guess = I.
+TEST(KktFactors, BlocksSolveTheirSystems) {
+  Settings s;
+  s.rho.obstacle = 1.5;
+  s.obstacles = 17;
+  const projection::KktFactors<double> kkt(s);
+  const int n = s.coefficients(), m = s.steps;
+  const auto basis = core::bernstein_basis(s.degree, m, s.horizon);
+  Eigen::MatrixXd A_eq(4, n);
+  A_eq << basis.P.row(0), basis.Pd.row(0), basis.P.row(m - 1), basis.Pd.row(m - 1);
+  Eigen::MatrixXd A_init(6, n);
+  A_init << A_eq, basis.P.row(s.via_step_1), basis.P.row(s.via_step_2);
+  const Eigen::MatrixXd Qm = s.rho.obstacle * s.obstacles * basis.P.transpose() * basis.P +
+                             s.rho.tracking * basis.P.transpose() * basis.P +
+                             s.rho.velocity * basis.Pd.transpose() * basis.Pd +
+                             s.rho.acceleration * basis.Pdd.transpose() * basis.Pdd;
+  const Eigen::MatrixXd Q = Qm + s.rho.projection * Eigen::MatrixXd::Identity(n, n);
+  EXPECT_LE((A_eq * kkt.M11).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LE((A_eq * kkt.M12 - Eigen::MatrixXd::Identity(4, 4)).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::MatrixXd null_projector =
+      Eigen::MatrixXd::Identity(n, n) - A_eq.transpose() * (A_eq * A_eq.transpose()).inverse() * A_eq;
+  EXPECT_LE((null_projector * (Q * kkt.M11 - Eigen::MatrixXd::Identity(n, n))).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_LE((kkt.M11_Qm - kkt.M11 * Qm).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LE((A_init * kkt.initial_guess - Eigen::MatrixXd::Identity(6, 6)).cwiseAbs().maxCoeff(), 1e-9);
+
+  // The float blocks are the double ones, rounded.
+  const projection::KktFactors<float> single(s);
+  EXPECT_TRUE(single.M11 == kkt.M11.cast<float>());
+  EXPECT_TRUE(single.initial_guess == kkt.initial_guess.cast<float>());
+}
+
+TEST(KktFactors, RejectsUnusableSettings) {
+  Settings s;
+  s.rho.projection = 0.0;
+  EXPECT_THROW(projection::KktFactors<double>{s}, std::invalid_argument);
 }

@@ -93,6 +93,23 @@ inline unsigned less_equal_bits(const Eigen::internal::packet_traits<double>::ty
 }
 #endif
 
+/// The padded time grid every kernel walks: `times` holds t_k (padded with T), `mask` 1 on the m valid steps
+/// and 0 on the padding, which keeps padded entries out of the residual.
+template <typename T>
+struct StepGrid {
+  const T* times;
+  const T* mask;
+  int steps;         // m
+  int padded_steps;  // m rounded up to the SIMD width
+};
+
+/// One quantity (p, pd or pdd, or a correction) of one sample on the padded grid, x and y apart.
+template <typename T>
+struct AxisArrays {
+  T* x;
+  T* y;
+};
+
 /// Obstacle points of one sample, laid out for the kernels: `xyv` holds N rows of (x, y, vx, vy) as in the
 /// problem; `x`, `y`, `vx`, `vy` the same as separate arrays padded to the SIMD width with far-away points.
 template <typename T>
@@ -106,19 +123,23 @@ struct ObstaclePoints {
   int padded_count;  // N rounded up to the SIMD width
 };
 
-/// Obstacle term for one sample (steps 2 and 6). For every padded step k and point j, w = p - p_o,j(t_k):
-/// writes to (excess_x, excess_y) the sum over points of e_o,j - p = (max(a, |w|)/|w| - 1) w, which is zero
-/// outside the disks, and returns the sum over valid steps of |r_o|^2 = max(0, a - |w|)^2.
+/// Obstacle term for one sample (steps 2 and 6; the targets of step 8 as a correction). For every padded
+/// step k and point j, w = p - p_o,j(t_k): writes to `excess` the sum over points of
+/// e_o,j - p = (max(a, |w|)/|w| - 1) w, which is zero outside the disks, and returns the sum over valid
+/// steps of |r_o|^2 = max(0, a - |w|)^2.
 ///
 /// Steps are taken a SIMD width at a time. For each such chunk, points whose swept position over the
 /// chunk's time stays farther than a (1 + margin) from the bounding box of the chunk's positions contribute
 /// exactly zero to both sums and are skipped; the others are visited in index order, so the result is the
-/// same as visiting every point. `near` is scratch space for N indices. mask: 1 on valid steps, 0 on padding.
+/// same as visiting every point. `near` is scratch space for N indices.
 template <typename T>
-T obstacle_term(const T* px, const T* py, const T* times, const T* mask, int steps, int padded_steps,
-                const ObstaclePoints<T>& points, T radius, int* near, T* excess_x, T* excess_y) {
+T obstacle_term(const StepGrid<T>& grid, AxisArrays<const T> position, const ObstaclePoints<T>& points, T radius,
+                int* near, AxisArrays<T> excess) {
   using S = Simd<T>;
   using Packet = typename S::Packet;
+  const T* px = position.x;
+  const T* py = position.y;
+  const T* times = grid.times;
   const Packet zero = ei::pset1<Packet>(T(0));
   const Packet one = ei::pset1<Packet>(T(1));
   const Packet a = ei::pset1<Packet>(radius);
@@ -128,13 +149,13 @@ T obstacle_term(const T* px, const T* py, const T* times, const T* mask, int ste
   const T keep_radius = radius * (sizeof(T) == 4 ? T(1.001) : T(1.000001));
   const Packet keep_squared = ei::pset1<Packet>(keep_radius * keep_radius);
   Packet squared_total = zero;
-  for (int k = 0; k < padded_steps; k += S::width) {
+  for (int k = 0; k < grid.padded_steps; k += S::width) {
     const Packet x = ei::padd(ei::ploadu<Packet>(px + k), nudge);
     const Packet y = ei::ploadu<Packet>(py + k);
     const Packet t = ei::ploadu<Packet>(times + k);
 
     // Bounding box of the chunk's valid positions, and its time span.
-    const int valid = std::min(S::width, steps - k);
+    const int valid = std::min(S::width, grid.steps - k);
     T x_min = px[k], x_max = px[k], y_min = py[k], y_max = py[k];
     if (valid == S::width) {
       x_min = ei::predux_min(x);
@@ -181,65 +202,93 @@ T obstacle_term(const T* px, const T* py, const T* times, const T* mask, int ste
       const Packet r2 = ei::pmax(ei::pmadd(wx, wx, ei::pmul(wy, wy)), tiny);
       const Packet inv = S::inverse_sqrt(r2);
       // e_o - p = p_o + a d_o u - p = (a d_o / |w| - 1) w, with a d_o = max(a, |w|).
-      const Packet excess = ei::pmax(ei::psub(ei::pmul(a, inv), one), zero);
-      ex = ei::pmadd(excess, wx, ex);
-      ey = ei::pmadd(excess, wy, ey);
-      // |r_o| = max(0, a - |w|) = |w| excess, so |r_o|^2 = |w|^2 excess^2.
-      squared = ei::pmadd(r2, ei::pmul(excess, excess), squared);
+      const Packet excess_scale = ei::pmax(ei::psub(ei::pmul(a, inv), one), zero);
+      ex = ei::pmadd(excess_scale, wx, ex);
+      ey = ei::pmadd(excess_scale, wy, ey);
+      // |r_o| = max(0, a - |w|) = |w| excess_scale, so |r_o|^2 = |w|^2 excess_scale^2.
+      squared = ei::pmadd(r2, ei::pmul(excess_scale, excess_scale), squared);
     }
-    ei::pstoreu(excess_x + k, ex);
-    ei::pstoreu(excess_y + k, ey);
-    squared_total = ei::pmadd(squared, ei::ploadu<Packet>(mask + k), squared_total);
+    ei::pstoreu(excess.x + k, ex);
+    ei::pstoreu(excess.y + k, ey);
+    squared_total = ei::pmadd(squared, ei::ploadu<Packet>(grid.mask + k), squared_total);
   }
   return ei::predux(squared_total);
 }
 
-/// Where a norm-band term measures from: w = value - (x0 + vx t, y0 + vy t). Zero for velocity and
+/// Where a norm-band family measures from: w = value - (x0 + vx t, y0 + vy t). Zero for velocity and
 /// acceleration; the linearly predicted target for tracking.
 template <typename T>
 struct Origin {
   T x = 0, y = 0, vx = 0, vy = 0;
 };
 
-/// Norm-band term (steps 3 to 6 for velocity, acceleration and tracking). For each padded step,
-/// d = clamp(|w|, lo, hi) with clamp(z, lo, hi) = min(max(z, lo), hi), and the weighted correction
-/// weight (d unit(w) - w), plus extra_weight * extra when `extra_x` is given, is written to (delta_x,
-/// delta_y). Returns the sum over valid steps of |w - d unit(w)|^2 = (|w| - d)^2. lo and hi are arrays
-/// (stride 1) or scalars (stride 0).
+/// A bound of a norm band: one value per padded step (the tracking band), or one value for every step.
 template <typename T>
-T band_term(const T* px, const T* py, const T* times, const T* mask, int padded_steps, const Origin<T>& origin,
-            const T* lo, int lo_stride, const T* hi, int hi_stride, T weight, const T* extra_x,
-            const T* extra_y, T extra_weight, T* delta_x, T* delta_y) {
+struct Bound {
+  const T* values;
+  int stride;  // 1: per step; 0: *values for every step
+
+  static Bound per_step(const T* values) { return {values, 1}; }
+  static Bound constant(const T& value) { return {&value, 0}; }
+};
+
+/// One norm-band family (steps 3, 4 or 5): the value it constrains, where w is measured from, the band
+/// [lo, hi] of |w| and its penalty weight rho_f.
+template <typename T>
+struct BandFamily {
+  AxisArrays<const T> value;  // pd, pdd or p
+  Origin<T> origin;
+  Bound<T> lo, hi;
+  T weight;
+};
+
+/// A correction computed earlier, weight * (x, y), that joins a family's rows of the correction S
+/// (the obstacles' sum over points joins the tracking rows, which are also P's rows).
+template <typename T>
+struct JoiningCorrection {
+  const T* x = nullptr;
+  const T* y = nullptr;
+  T weight = T(0);
+};
+
+/// Norm-band term of one family (steps 3 to 6). For each padded step, d = clamp(|w|, lo, hi) with
+/// clamp(z, lo, hi) = min(max(z, lo), hi), and the weighted correction weight (d unit(w) - w), plus the
+/// joining correction when it has arrays, is written to `correction`. Returns the sum over valid steps of
+/// |w - d unit(w)|^2 = (|w| - d)^2.
+template <typename T>
+T band_term(const StepGrid<T>& grid, const BandFamily<T>& family, const JoiningCorrection<T>& joining,
+            AxisArrays<T> correction) {
   using S = Simd<T>;
   using Packet = typename S::Packet;
   const Packet one = ei::pset1<Packet>(T(1));
   const Packet tiny = ei::pset1<Packet>(S::tiny);
-  const Packet rho = ei::pset1<Packet>(weight);
-  const Packet rho_extra = ei::pset1<Packet>(extra_weight);
-  const Packet x0 = ei::pset1<Packet>(origin.x), y0 = ei::pset1<Packet>(origin.y);
-  const Packet vx = ei::pset1<Packet>(origin.vx), vy = ei::pset1<Packet>(origin.vy);
+  const Packet rho = ei::pset1<Packet>(family.weight);
+  const Packet rho_joining = ei::pset1<Packet>(joining.weight);
+  const Packet x0 = ei::pset1<Packet>(family.origin.x), y0 = ei::pset1<Packet>(family.origin.y);
+  const Packet vx = ei::pset1<Packet>(family.origin.vx), vy = ei::pset1<Packet>(family.origin.vy);
   const Packet nudge = ei::pset1<Packet>(S::nudge);
+  const Bound<T> lo = family.lo, hi = family.hi;
   Packet squared_total = ei::pset1<Packet>(T(0));
-  for (int k = 0; k < padded_steps; k += S::width) {
-    const Packet t = ei::ploadu<Packet>(times + k);
-    const Packet wx = ei::padd(ei::psub(ei::ploadu<Packet>(px + k), ei::pmadd(vx, t, x0)), nudge);
-    const Packet wy = ei::psub(ei::ploadu<Packet>(py + k), ei::pmadd(vy, t, y0));
-    const Packet low = lo_stride ? ei::ploadu<Packet>(lo + k) : ei::pset1<Packet>(*lo);
-    const Packet high = hi_stride ? ei::ploadu<Packet>(hi + k) : ei::pset1<Packet>(*hi);
+  for (int k = 0; k < grid.padded_steps; k += S::width) {
+    const Packet t = ei::ploadu<Packet>(grid.times + k);
+    const Packet wx = ei::padd(ei::psub(ei::ploadu<Packet>(family.value.x + k), ei::pmadd(vx, t, x0)), nudge);
+    const Packet wy = ei::psub(ei::ploadu<Packet>(family.value.y + k), ei::pmadd(vy, t, y0));
+    const Packet low = lo.stride ? ei::ploadu<Packet>(lo.values + k) : ei::pset1<Packet>(*lo.values);
+    const Packet high = hi.stride ? ei::ploadu<Packet>(hi.values + k) : ei::pset1<Packet>(*hi.values);
     const Packet r2 = ei::pmax(ei::pmadd(wx, wx, ei::pmul(wy, wy)), tiny);
     const Packet inv = S::inverse_sqrt(r2);
     const Packet norm = ei::pmul(r2, inv);
     const Packet d = ei::pmin(ei::pmax(norm, low), high);
     const Packet scale = ei::pmul(rho, ei::psub(ei::pmul(d, inv), one));  // rho (d u - w) = rho (d/|w| - 1) w
     Packet dx = ei::pmul(scale, wx), dy = ei::pmul(scale, wy);
-    if (extra_x != nullptr) {
-      dx = ei::pmadd(rho_extra, ei::ploadu<Packet>(extra_x + k), dx);
-      dy = ei::pmadd(rho_extra, ei::ploadu<Packet>(extra_y + k), dy);
+    if (joining.x != nullptr) {
+      dx = ei::pmadd(rho_joining, ei::ploadu<Packet>(joining.x + k), dx);
+      dy = ei::pmadd(rho_joining, ei::ploadu<Packet>(joining.y + k), dy);
     }
-    ei::pstoreu(delta_x + k, dx);
-    ei::pstoreu(delta_y + k, dy);
+    ei::pstoreu(correction.x + k, dx);
+    ei::pstoreu(correction.y + k, dy);
     const Packet gap = ei::psub(norm, d);
-    squared_total = ei::pmadd(ei::pmul(gap, gap), ei::ploadu<Packet>(mask + k), squared_total);
+    squared_total = ei::pmadd(ei::pmul(gap, gap), ei::ploadu<Packet>(grid.mask + k), squared_total);
   }
   return ei::predux(squared_total);
 }

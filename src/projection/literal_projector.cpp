@@ -1,10 +1,10 @@
 #include "occtrack/projection/literal_projector.hpp"
 
-#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
 
 #include "occtrack/core/bernstein.hpp"
+#include "occtrack/projection/kkt.hpp"
 #include "problem_check.hpp"
 
 namespace occtrack::projection {
@@ -15,16 +15,12 @@ struct LiteralProjector<T>::Impl {
   using Vec = Eigen::Matrix<T, Eigen::Dynamic, 1>;
 
   Settings s;
+  KktFactors<T> kkt;  // both KKT systems, factored once (validates the settings first)
   int n, m, N;
-  Mat P, Pd, Pdd, A_obstacle;        // A_obstacle: P stacked N times (N m x n)
-  Mat A_eq, A_init;                  // 4 x n, 6 x n
-  Eigen::PartialPivLU<Mat> kkt;      // projection KKT, factored once
-  Eigen::PartialPivLU<Mat> kkt_init; // initial-guess KKT, factored once
+  Mat P, Pd, Pdd, A_obstacle;  // A_obstacle: P stacked N times (N m x n)
   Vec times;
 
-  explicit Impl(const Settings& settings) : s(settings) {
-    std::string error;
-    if (!s.validate(&error)) throw std::invalid_argument("projection settings: " + error);
+  explicit Impl(const Settings& settings) : s(settings), kkt(settings) {
     n = s.coefficients();
     m = s.steps;
     N = s.obstacles;
@@ -35,21 +31,6 @@ struct LiteralProjector<T>::Impl {
     times = basis.times.cast<T>();
     A_obstacle.resize(N * m, n);
     for (int j = 0; j < N; ++j) A_obstacle.block(j * m, 0, m, n) = P;
-    A_eq.resize(4, n);
-    A_eq << P.row(0), Pd.row(0), P.row(m - 1), Pd.row(m - 1);
-    A_init.resize(6, n);
-    A_init << A_eq, P.row(s.via_step_1), P.row(s.via_step_2);
-
-    const auto& rho = s.rho;
-    Mat Q = T(rho.projection) * Mat::Identity(n, n) + T(rho.obstacle) * A_obstacle.transpose() * A_obstacle +
-            T(rho.velocity) * Pd.transpose() * Pd + T(rho.acceleration) * Pdd.transpose() * Pdd +
-            T(rho.tracking) * P.transpose() * P;
-    Mat K = Mat::Zero(n + 4, n + 4);
-    K << Q, A_eq.transpose(), A_eq, Mat::Zero(4, 4);
-    kkt.compute(K);
-    Mat K0 = Mat::Zero(n + 6, n + 6);
-    K0 << Pdd.transpose() * Pdd, A_init.transpose(), A_init, Mat::Zero(6, 6);
-    kkt_init.compute(K0);
   }
 
   // unit(w) through the angle, as the reference code does: (cos(atan2(y, x)), sin(atan2(y, x))).
@@ -59,17 +40,34 @@ struct LiteralProjector<T>::Impl {
     uy = std::sin(angle);
   }
 
+  /// Steps 3 to 5 at one step, for w = value - origin: d = clamp(|w|, lo, hi), u = unit(w); the target
+  /// e = origin + d u (step 8) and the residual r = w - d u (step 6).
+  struct BandStep {
+    T ex, ey, rx, ry;
+  };
+  static BandStep band_step(T wx, T wy, T origin_x, T origin_y, T lo, T hi) {
+    const T d = std::min(std::max(std::sqrt(wx * wx + wy * wy), lo), hi);
+    T ux, uy;
+    direction(wx, wy, ux, uy);
+    return {origin_x + d * ux, origin_y + d * uy, wx - d * ux, wy - d * uy};
+  }
+
+  static void store(const BandStep& step, Vec (&e)[2], Vec (&r)[2], int k) {
+    e[0](k) = step.ex;
+    e[1](k) = step.ey;
+    r[0](k) = step.rx;
+    r[1](k) = step.ry;
+  }
+
   void solve_sample(const Problem<T>& p, int b, Result<T>& result) const {
     const auto& rho = s.rho;
     const T a = T(s.obstacle_radius);
     Vec c[2], lambda[2], c_bar[2];
-    Vec b_eq[2];
+    Eigen::Matrix<T, 4, 1> b_eq[2];
     for (int axis = 0; axis < 2; ++axis) {
-      b_eq[axis].resize(4);
-      b_eq[axis] << T(0), p.robot_velocity(b, axis), p.terminal(b, axis), p.terminal(b, 2 + axis);
-      Vec rhs0 = Vec::Zero(n + 6);
-      rhs0.tail(6) << b_eq[axis], p.via_points(b, axis), p.via_points(b, 2 + axis);
-      c[axis] = kkt_init.solve(rhs0).head(n);
+      // Initial guess: the c of its KKT system.
+      b_eq[axis] = KktFactors<T>::equality_rhs(p, b, axis);
+      c[axis] = kkt.initial_guess * KktFactors<T>::initial_guess_rhs(p, b, axis);
       result.xi_init.row(b).segment(axis * n, n) = c[axis].transpose();
       lambda[axis] = p.lambda0.row(b).segment(axis * n, n).transpose();
       c_bar[axis] = p.xi_bar.row(b).segment(axis * n, n).transpose();
@@ -83,7 +81,7 @@ struct LiteralProjector<T>::Impl {
         vel[axis] = Pd * c[axis];
         acc[axis] = Pdd * c[axis];
       }
-      // 2-6. Directions, distances, residuals and targets, stacked like A_obstacle.
+      // 2-6 and 8. Directions, distances, residuals and targets, stacked like A_obstacle.
       Vec r_o[2], e_o[2], r_v[2], e_v[2], r_a[2], e_a[2], r_r[2], e_r[2];
       for (int axis = 0; axis < 2; ++axis) {
         r_o[axis].resize(N * m);
@@ -92,6 +90,7 @@ struct LiteralProjector<T>::Impl {
       }
       for (int j = 0; j < N; ++j) {
         for (int k = 0; k < m; ++k) {
+          // 2. Obstacles.
           const T ox = p.obstacles(b, 4 * j) + p.obstacles(b, 4 * j + 2) * times(k);
           const T oy = p.obstacles(b, 4 * j + 1) + p.obstacles(b, 4 * j + 3) * times(k);
           const T wx = pos[0](k) - ox, wy = pos[1](k) - oy;
@@ -106,52 +105,32 @@ struct LiteralProjector<T>::Impl {
       }
       for (int k = 0; k < m; ++k) {
         // 3. Velocity.
-        const T speed = std::sqrt(vel[0](k) * vel[0](k) + vel[1](k) * vel[1](k));
-        const T d_v = std::min(std::max(speed, T(s.speed_min)), T(s.speed_max));
-        T vx_u, vy_u;
-        direction(vel[0](k), vel[1](k), vx_u, vy_u);
-        e_v[0](k) = d_v * vx_u;
-        e_v[1](k) = d_v * vy_u;
-        r_v[0](k) = vel[0](k) - e_v[0](k);
-        r_v[1](k) = vel[1](k) - e_v[1](k);
+        store(band_step(vel[0](k), vel[1](k), T(0), T(0), T(s.speed_min), T(s.speed_max)), e_v, r_v, k);
         // 4. Acceleration.
-        const T accel = std::sqrt(acc[0](k) * acc[0](k) + acc[1](k) * acc[1](k));
-        const T d_a = std::min(std::max(accel, T(0)), T(s.accel_max));
-        T ax_u, ay_u;
-        direction(acc[0](k), acc[1](k), ax_u, ay_u);
-        e_a[0](k) = d_a * ax_u;
-        e_a[1](k) = d_a * ay_u;
-        r_a[0](k) = acc[0](k) - e_a[0](k);
-        r_a[1](k) = acc[1](k) - e_a[1](k);
+        store(band_step(acc[0](k), acc[1](k), T(0), T(0), T(0), T(s.accel_max)), e_a, r_a, k);
         // 5. Tracking.
         const T xr = p.target(b, 0) + p.target(b, 2) * times(k);
         const T yr = p.target(b, 1) + p.target(b, 3) * times(k);
-        const T wx = pos[0](k) - xr, wy = pos[1](k) - yr;
-        const T dist = std::sqrt(wx * wx + wy * wy);
-        const T d_r = std::min(std::max(dist, p.distance_min(b, k)), p.distance_max(b, k));
-        T rx_u, ry_u;
-        direction(wx, wy, rx_u, ry_u);
-        e_r[0](k) = xr + d_r * rx_u;
-        e_r[1](k) = yr + d_r * ry_u;
-        r_r[0](k) = wx - d_r * rx_u;
-        r_r[1](k) = wy - d_r * ry_u;
+        store(band_step(pos[0](k) - xr, pos[1](k) - yr, xr, yr, p.distance_min(b, k), p.distance_max(b, k)), e_r,
+              r_r, k);
       }
       // 6. Residual: Euclidean norm of each family over all its entries.
       auto norm2 = [](const Vec& x, const Vec& y) { return std::sqrt(x.squaredNorm() + y.squaredNorm()); };
-      residual_sum += norm2(r_o[0], r_o[1]) + norm2(r_a[0], r_a[1]) + norm2(r_v[0], r_v[1]) + norm2(r_r[0], r_r[1]);
+      const T residual =
+          norm2(r_o[0], r_o[1]) + norm2(r_a[0], r_a[1]) + norm2(r_v[0], r_v[1]) + norm2(r_r[0], r_r[1]);
+      residual_sum += residual;
+      if (s.record_residual_history) result.residual_history(b, iteration) = residual;
       for (int axis = 0; axis < 2; ++axis) {
         // 7. Multiplier.
         lambda[axis] -= T(rho.obstacle) * A_obstacle.transpose() * r_o[axis] +
                         T(rho.acceleration) * Pdd.transpose() * r_a[axis] +
                         T(rho.velocity) * Pd.transpose() * r_v[axis] + T(rho.tracking) * P.transpose() * r_r[axis];
-        // 9. New xi from the KKT system.
-        Vec rhs(n + 4);
-        rhs.head(n) = lambda[axis] + T(rho.projection) * c_bar[axis] +
-                      T(rho.obstacle) * A_obstacle.transpose() * e_o[axis] +
-                      T(rho.velocity) * Pd.transpose() * e_v[axis] +
-                      T(rho.acceleration) * Pdd.transpose() * e_a[axis] + T(rho.tracking) * P.transpose() * e_r[axis];
-        rhs.tail(4) = b_eq[axis];
-        c[axis] = kkt.solve(rhs).head(n);
+        // 9. New xi: the c of the KKT system [[Q, A_eq'], [A_eq, 0]] [c; nu] = [rhs; b_eq].
+        const Vec rhs = lambda[axis] + T(rho.projection) * c_bar[axis] +
+                        T(rho.obstacle) * A_obstacle.transpose() * e_o[axis] +
+                        T(rho.velocity) * Pd.transpose() * e_v[axis] +
+                        T(rho.acceleration) * Pdd.transpose() * e_a[axis] + T(rho.tracking) * P.transpose() * e_r[axis];
+        c[axis] = kkt.M11 * rhs + kkt.M12 * b_eq[axis];
       }
     }
     result.xi.row(b).head(n) = c[0].transpose();

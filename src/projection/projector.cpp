@@ -1,6 +1,5 @@
 #include "occtrack/projection/projector.hpp"
 
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -9,6 +8,7 @@
 
 #include "kernels.hpp"
 #include "occtrack/core/bernstein.hpp"
+#include "occtrack/projection/kkt.hpp"
 #include "problem_check.hpp"
 
 #if defined(OCCTRACK_HAVE_OPENMP)
@@ -68,6 +68,22 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 // 2b + 1 its y axis, so one matrix product evaluates every sample and axis at once. Step arrays are padded
 // to a multiple of the SIMD width; the basis rows of the padding are zero, so padded entries never reach
 // the coefficients, and a 0/1 mask keeps them out of the residual.
+//
+// How this loop differs from the spec's arithmetic, for speed (the same values up to round-off):
+//  - Residual-sized corrections. Steps 2 to 5 do not form the targets e_f of step 8; each family writes its
+//    weighted correction rho_f (e_f - value), zero where the constraint holds, into
+//    S = [rho_o sum_j (e_o,j - p) + rho_r (e_r - p); rho_v (e_v - pd); rho_a (e_a - pdd)]
+//    (the obstacles' sum joins the tracking rows, since both are P's rows), and h = G' S with G = [P; Pd; Pdd].
+//    Then step 7 is lambda_{k+1} = lambda_k + h, and since G' targets = h + (Q - rho_p I) xi_k, step 9 is
+//      xi_{k+1} = M11 (lambda_{k+1} + rho_p xi_bar + G' targets) + M12 b_eq
+//               = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + Bias,  Bias = M11 rho_p xi_bar + M12 b_eq.
+//    This avoids the cancellation between N p and sum_j e_o,j that costs float precision.
+//  - Pre-inverted KKT blocks: M11, M12 and M11 (Q - rho_p I) come from KktFactors (kkt.hpp), and Bias, the
+//    part of xi_{k+1} no iteration changes, is formed once per block.
+//  - Far-point skipping: the obstacle kernel skips the points that cannot come within a of a chunk of steps;
+//    they contribute exact zeros (kernels.hpp, obstacle_term).
+//  - unit(w) without trigonometry, w / |w|, with unit(0) = (1, 0) through a nudge (kernels.hpp).
+// The projection twin in torch (src/learning/projection.cpp) uses the same arrangement.
 template <typename T>
 struct Projector<T>::Impl {
   // Samples are solved in blocks: a block's matrices stay in the L1/L2 cache through all K iterations,
@@ -81,35 +97,56 @@ struct Projector<T>::Impl {
     int block_first = 0, block_count = 0;  // the block in hand
     Matrix<T> C, C_next, Lambda, Bias, Rhs, H;  // n x 2count
     Matrix<T> Eval;                              // 3 mp x 2count: p, pd, pdd at every padded step
-    Matrix<T> Delta;                             // 3 mp x 2count: weighted corrections S (see solve_chunk)
+    Matrix<T> Delta;                             // 3 mp x 2count: the weighted corrections S
     Matrix<T> Bound_min, Bound_max;              // mp x count: tracking band, padded
     Vector<T> obstacle_x, obstacle_y;            // mp: sum over points of e_o - p
     Matrix<T> Points;                            // 4 Np x count: x, y, vx, vy of each sample's points
     std::vector<int> near;                       // Np: points near the current chunk of steps
   };
 
+  /// The settings' scalars in T, converted once.
+  struct Scalars {
+    T radius, speed_min, speed_max, accel_min, accel_max;
+    T rho_obstacle, rho_velocity, rho_acceleration, rho_tracking, rho_projection;
+    T inverse_iterations;  // 1 / K, for the mean residual
+  };
+
+  /// Sample i of the block in hand as the kernels see it: its values (rows of Eval) and its corrections
+  /// (rows of Delta), per axis.
+  struct SampleArrays {
+    int b;  // row in the problem and the result
+    int i;  // column of the block
+    detail::AxisArrays<const T> position, velocity, acceleration;
+    detail::AxisArrays<T> position_correction, velocity_correction, acceleration_correction;
+  };
+
+  /// Squared norms of the four residual families of one sample (step 6).
+  struct ResidualSquares {
+    T obstacle = T(0), velocity = T(0), acceleration = T(0), tracking = T(0);
+  };
+
   Settings settings;
+  KktFactors<T> kkt;  // validates the settings first
+  Scalars scalars{};
   int n = 0, m = 0, mp = 0, Np = 0;
   int block_size = 1;  // samples per block
-  Matrix<T> G;             // 3 mp x n: [P; Pd; Pdd], padded with zero rows
-  Matrix<T> M11;           // n x n: top-left block of the inverse projection KKT matrix
-  Matrix<T> M11_Qm;        // n x n: M11 (Q - rho_p I)
-  Matrix<T> M12;           // n x 4: top-right block (equality right-hand side)
-  Matrix<T> InitialGuess;  // n x 6: maps (0, v0, x_f, vx_f, x_1, x_2) of one axis to xi_0
-  Vector<T> times;         // mp
-  Vector<T> mask;          // mp: 1 on valid steps, 0 on padding
+  Matrix<T> G;         // 3 mp x n: [P; Pd; Pdd], padded with zero rows
+  Vector<T> times;     // mp
+  Vector<T> mask;      // mp: 1 on valid steps, 0 on padding
+  detail::StepGrid<T> grid{};
   std::vector<Workspace> workspaces;
 
-  explicit Impl(const Settings& s) : settings(s) {
-    std::string error;
-    if (!settings.validate(&error)) throw std::invalid_argument("projection settings: " + error);
+  explicit Impl(const Settings& s) : settings(s), kkt(s) {
     n = settings.coefficients();
     m = settings.steps;
     mp = round_up(m, detail::Simd<T>::width);
     Np = round_up(settings.obstacles, detail::Simd<T>::width);
-    const core::BernsteinBasis basis = core::bernstein_basis(settings.degree, m, settings.horizon);
-    factor(basis);
+    const auto& rho = settings.rho;
+    scalars = {T(settings.obstacle_radius), T(settings.speed_min), T(settings.speed_max), T(0),
+               T(settings.accel_max), T(rho.obstacle), T(rho.velocity), T(rho.acceleration), T(rho.tracking),
+               T(rho.projection), T(1) / T(settings.iterations)};
 
+    const core::BernsteinBasis basis = core::bernstein_basis(settings.degree, m, settings.horizon);
     G.setZero(3 * mp, n);
     G.block(0, 0, m, n) = basis.P.cast<T>();
     G.block(mp, 0, m, n) = basis.Pd.cast<T>();
@@ -118,6 +155,7 @@ struct Projector<T>::Impl {
     times.head(m) = basis.times.cast<T>();
     mask.setZero(mp);
     mask.head(m).setOnes();
+    grid = {times.data(), mask.data(), m, mp};
 
     const std::size_t per_sample = 3 * static_cast<std::size_t>(mp) * 2 * sizeof(T);
     block_size = static_cast<int>(std::clamp<std::size_t>(kScratchBudget / per_sample, 1, kMaxBlock));
@@ -141,52 +179,17 @@ struct Projector<T>::Impl {
     }
   }
 
-  // Factors, in double, the two KKT systems whose matrices never change (spec: "Initial guess", step 9).
-  void factor(const core::BernsteinBasis& basis) {
-    const auto& rho = settings.rho;
-    const Eigen::MatrixXd PtP = basis.P.transpose() * basis.P;
-    const Eigen::MatrixXd Qm = rho.obstacle * settings.obstacles * PtP + rho.tracking * PtP +
-                               rho.velocity * basis.Pd.transpose() * basis.Pd +
-                               rho.acceleration * basis.Pdd.transpose() * basis.Pdd;
-    Eigen::MatrixXd A_eq(4, n);
-    A_eq << basis.P.row(0), basis.Pd.row(0), basis.P.row(m - 1), basis.Pd.row(m - 1);
-    Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + 4, n + 4);
-    kkt.topLeftCorner(n, n) = Qm + rho.projection * Eigen::MatrixXd::Identity(n, n);
-    kkt.topRightCorner(n, 4) = A_eq.transpose();
-    kkt.bottomLeftCorner(4, n) = A_eq;
-    const Eigen::MatrixXd inverse = kkt.fullPivLu().inverse();
-    M11 = inverse.topLeftCorner(n, n).cast<T>();
-    M12 = inverse.topRightCorner(n, 4).cast<T>();
-    M11_Qm = (inverse.topLeftCorner(n, n) * Qm).cast<T>();
-
-    Eigen::MatrixXd A_init(6, n);
-    A_init << A_eq, basis.P.row(settings.via_step_1), basis.P.row(settings.via_step_2);
-    Eigen::MatrixXd kkt_init = Eigen::MatrixXd::Zero(n + 6, n + 6);
-    kkt_init.topLeftCorner(n, n) = basis.Pdd.transpose() * basis.Pdd;
-    kkt_init.topRightCorner(n, 6) = A_init.transpose();
-    kkt_init.bottomLeftCorner(6, n) = A_init;
-    InitialGuess = kkt_init.fullPivLu().inverse().topRightCorner(n, 6).cast<T>();
-  }
-
-  // Loads the block's inputs: xi_0 (spec "Initial guess"), lambda_0, the constant part of step 9.
+  // Loads the block's inputs: xi_0 (spec "Initial guess"), lambda_0, and Bias, the constant part of step 9.
   void prepare_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
-    const T rho_p = T(settings.rho.projection);
-    Eigen::Matrix<T, 6, 1> initial_rhs;
-    Eigen::Matrix<T, 4, 1> equality_rhs;
     for (int i = 0; i < w.block_count; ++i) {
       const int b = w.block_first + i;
       for (int axis = 0; axis < 2; ++axis) {
         const int col = 2 * i + axis;
-        const T v0 = problem.robot_velocity(b, axis);
-        const T xf = problem.terminal(b, axis), vf = problem.terminal(b, 2 + axis);
-        equality_rhs << T(0), v0, xf, vf;
-        initial_rhs << equality_rhs, problem.via_points(b, axis), problem.via_points(b, 2 + axis);
-        w.C.col(col).noalias() = InitialGuess * initial_rhs;
+        w.C.col(col).noalias() = kkt.initial_guess * KktFactors<T>::initial_guess_rhs(problem, b, axis);
         result.xi_init.row(b).segment(axis * n, n) = w.C.col(col).transpose();
         w.Lambda.col(col) = problem.lambda0.row(b).segment(axis * n, n).transpose();
-        // Bias = M11 rho_p xi_bar + M12 b_eq: the part of the new xi that no iteration changes.
-        w.Rhs.col(col) = rho_p * problem.xi_bar.row(b).segment(axis * n, n).transpose();
-        w.Bias.col(col).noalias() = M12 * equality_rhs;
+        w.Rhs.col(col) = scalars.rho_projection * problem.xi_bar.row(b).segment(axis * n, n).transpose();
+        w.Bias.col(col).noalias() = kkt.M12 * KktFactors<T>::equality_rhs(problem, b, axis);
       }
       for (int j = 0; j < settings.obstacles; ++j)
         for (int field = 0; field < 4; ++field) w.Points(field * Np + j, i) = problem.obstacles(b, 4 * j + field);
@@ -195,73 +198,117 @@ struct Projector<T>::Impl {
       result.residual(b) = T(0);
     }
     const int cols = 2 * w.block_count;
-    w.Bias.leftCols(cols).noalias() += M11 * w.Rhs.leftCols(cols);
+    w.Bias.leftCols(cols).noalias() += kkt.M11 * w.Rhs.leftCols(cols);  // Bias = M11 rho_p xi_bar + M12 b_eq
   }
 
-  // Steps 1 to 9 for every sample of the chunk, K times.
-  //
-  // The spec's step 7 and 9 are rearranged so that only small, residual-sized quantities are formed:
-  // with S = [rho_o sum_j (e_o,j - p) + rho_r (e_r - p); rho_v (e_v - pd); rho_a (e_a - pdd)] and h = G' S,
-  //   step 7:  lambda_{k+1} = lambda_k + h
-  //   step 9:  xi_{k+1} = M11 (lambda_{k+1} + rho_p xi_bar + G' targets) + M12 b_eq
-  //                     = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + Bias,
-  // because G' targets = h + (Q - rho_p I) xi_k. This is the same arithmetic up to round-off, and it avoids
-  // the cancellation between N p and sum_j e_o,j that costs float precision.
-  void iterate_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
-    const auto& rho = settings.rho;
-    const T radius = T(settings.obstacle_radius);
-    const T v_min = T(settings.speed_min), v_max = T(settings.speed_max);
-    const T a_min = T(0), a_max = T(settings.accel_max);
-    const T rho_o = T(rho.obstacle), rho_r = T(rho.tracking);
-    const int N = settings.obstacles;
-    const T inv_count = T(1) / T(settings.iterations);
-    const int cols = 2 * w.block_count;
-    auto C = w.C.leftCols(cols), C_next = w.C_next.leftCols(cols), Lambda = w.Lambda.leftCols(cols);
-    auto Rhs = w.Rhs.leftCols(cols), H = w.H.leftCols(cols), Eval = w.Eval.leftCols(cols);
-    for (int iteration = 0; iteration < settings.iterations; ++iteration) {
-      Eval.noalias() = G * C;  // step 1
-      for (int i = 0; i < w.block_count; ++i) {
-        const int b = w.block_first + i;
-        T* px = w.Eval.col(2 * i).data();
-        T* py = w.Eval.col(2 * i + 1).data();
-        T* dx = w.Delta.col(2 * i).data();
-        T* dy = w.Delta.col(2 * i + 1).data();
+  // ---- One iteration, shared/spec/projection.md steps 1 to 9, on a block of samples. ----
 
-        // Steps 2 and 6: obstacles.
-        const T* soa = w.Points.col(i).data();
-        const detail::ObstaclePoints<T> points{problem.obstacles.row(b).data(), soa, soa + Np, soa + 2 * Np,
-                                               soa + 3 * Np, N, Np};
-        const T obstacle_sq =
-            N == 0 ? T(0)
-                   : detail::obstacle_term<T>(px, py, times.data(), mask.data(), m, mp, points, radius,
-                                              w.near.data(), w.obstacle_x.data(), w.obstacle_y.data());
-        // Step 5: tracking, against the linear prediction of the target; the obstacle correction joins here.
-        const detail::Origin<T> target{problem.target(b, 0), problem.target(b, 1), problem.target(b, 2),
-                                       problem.target(b, 3)};
-        const T tracking_sq = detail::band_term<T>(
-            px, py, times.data(), mask.data(), mp, target, w.Bound_min.col(i).data(), 1, w.Bound_max.col(i).data(),
-            1, rho_r, N > 0 ? w.obstacle_x.data() : nullptr, w.obstacle_y.data(), rho_o, dx, dy);
-        // Steps 3 and 4: velocity and acceleration.
-        const detail::Origin<T> none;
-        const T velocity_sq = detail::band_term<T>(px + mp, py + mp, times.data(), mask.data(), mp, none, &v_min, 0,
-                                                   &v_max, 0, T(rho.velocity), nullptr, nullptr, T(0), dx + mp,
-                                                   dy + mp);
-        const T accel_sq = detail::band_term<T>(px + 2 * mp, py + 2 * mp, times.data(), mask.data(), mp, none,
-                                                &a_min, 0, &a_max, 0, T(rho.acceleration), nullptr, nullptr, T(0),
-                                                dx + 2 * mp, dy + 2 * mp);
-        // Step 6: |r_o| + |r_a| + |r_v| + |r_r|, averaged over the iterations.
-        const T residual =
-            std::sqrt(obstacle_sq) + std::sqrt(accel_sq) + std::sqrt(velocity_sq) + std::sqrt(tracking_sq);
-        result.residual(b) += residual * inv_count;
-        if (settings.record_residual_history) result.residual_history(b, iteration) = residual;
+  // Step 1: p, pd, pdd of every sample and axis of the block on the padded grid: Eval = G xi.
+  void evaluate_trajectories(Workspace& w) const {
+    const int cols = 2 * w.block_count;
+    w.Eval.leftCols(cols).noalias() = G * w.C.leftCols(cols);
+  }
+
+  SampleArrays sample_arrays(Workspace& w, int i) const {
+    const T* px = w.Eval.col(2 * i).data();
+    const T* py = w.Eval.col(2 * i + 1).data();
+    T* dx = w.Delta.col(2 * i).data();
+    T* dy = w.Delta.col(2 * i + 1).data();
+    return {w.block_first + i,
+            i,
+            {px, py},
+            {px + mp, py + mp},
+            {px + 2 * mp, py + 2 * mp},
+            {dx, dy},
+            {dx + mp, dy + mp},
+            {dx + 2 * mp, dy + 2 * mp}};
+  }
+
+  // Step 2: obstacles. w = p - p_o,j, u = unit(w), d_o = max(1, |w| / a), for every point and step. Leaves
+  // the sum over points of e_o,j - p (step 8's targets, as a correction) in w.obstacle_x/y, for step 5 to
+  // join, and returns |r_o|^2 (step 6).
+  T update_obstacle_directions(const Problem<T>& problem, Workspace& w, const SampleArrays& s) const {
+    if (settings.obstacles == 0) return T(0);
+    const T* soa = w.Points.col(s.i).data();
+    const detail::ObstaclePoints<T> points{problem.obstacles.row(s.b).data(), soa, soa + Np, soa + 2 * Np,
+                                           soa + 3 * Np, settings.obstacles, Np};
+    return detail::obstacle_term<T>(grid, s.position, points, scalars.radius, w.near.data(),
+                                    {w.obstacle_x.data(), w.obstacle_y.data()});
+  }
+
+  // Step 3: velocity. u_v = unit(pd), d_v = clamp(|pd|, v_min, v_max); writes rho_v (e_v - pd), returns |r_v|^2.
+  T update_velocity_directions(const SampleArrays& s) const {
+    const detail::BandFamily<T> velocity{s.velocity, {}, detail::Bound<T>::constant(scalars.speed_min),
+                                         detail::Bound<T>::constant(scalars.speed_max), scalars.rho_velocity};
+    return detail::band_term<T>(grid, velocity, {}, s.velocity_correction);
+  }
+
+  // Step 4: acceleration. u_a = unit(pdd), d_a = clamp(|pdd|, 0, a_max); writes rho_a (e_a - pdd), returns
+  // |r_a|^2.
+  T update_acceleration_directions(const SampleArrays& s) const {
+    const detail::BandFamily<T> acceleration{s.acceleration, {}, detail::Bound<T>::constant(scalars.accel_min),
+                                             detail::Bound<T>::constant(scalars.accel_max),
+                                             scalars.rho_acceleration};
+    return detail::band_term<T>(grid, acceleration, {}, s.acceleration_correction);
+  }
+
+  // Step 5: tracking. w_r = p - p_r against the linear prediction of the target, u_r = unit(w_r),
+  // d_r = clamp(|w_r|, d_min_k, d_max_k); writes rho_r (e_r - p) + rho_o sum_j (e_o,j - p) to P's rows of S
+  // and returns |r_r|^2.
+  T update_tracking_directions(const Problem<T>& problem, const Workspace& w, const SampleArrays& s) const {
+    const detail::BandFamily<T> tracking{
+        s.position,
+        {problem.target(s.b, 0), problem.target(s.b, 1), problem.target(s.b, 2), problem.target(s.b, 3)},
+        detail::Bound<T>::per_step(w.Bound_min.col(s.i).data()),
+        detail::Bound<T>::per_step(w.Bound_max.col(s.i).data()),
+        scalars.rho_tracking};
+    detail::JoiningCorrection<T> obstacles;
+    if (settings.obstacles > 0) obstacles = {w.obstacle_x.data(), w.obstacle_y.data(), scalars.rho_obstacle};
+    return detail::band_term<T>(grid, tracking, obstacles, s.position_correction);
+  }
+
+  // Step 6: the iteration's residual |r_o| + |r_a| + |r_v| + |r_r|, and its mean over the K iterations.
+  void record_residual(const ResidualSquares& r, int b, int iteration, Result<T>& result) const {
+    const T residual = std::sqrt(r.obstacle) + std::sqrt(r.acceleration) + std::sqrt(r.velocity) +
+                       std::sqrt(r.tracking);
+    result.residual(b) += residual * scalars.inverse_iterations;
+    if (settings.record_residual_history) result.residual_history(b, iteration) = residual;
+  }
+
+  // Step 7: lambda -= rho_o P' sum_j r_o,j + rho_a Pdd' r_a + rho_v Pd' r_v + rho_r P' r_r, that is
+  // lambda += h with h = G' S.
+  void update_multiplier(Workspace& w) const {
+    const int cols = 2 * w.block_count;
+    w.H.leftCols(cols).noalias() = G.transpose() * w.Delta.leftCols(cols);
+    w.Lambda.leftCols(cols) += w.H.leftCols(cols);
+  }
+
+  // Steps 8 and 9: the targets (already in h) and the new xi from the KKT system,
+  // xi_{k+1} = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + Bias.
+  void update_trajectory(Workspace& w) const {
+    const int cols = 2 * w.block_count;
+    auto C = w.C.leftCols(cols), C_next = w.C_next.leftCols(cols);
+    w.Rhs.leftCols(cols) = w.Lambda.leftCols(cols) + w.H.leftCols(cols);
+    C_next = w.Bias.leftCols(cols);
+    C_next.noalias() += kkt.M11 * w.Rhs.leftCols(cols);
+    C_next.noalias() += kkt.M11_Qm * C;
+    C = C_next;
+  }
+
+  void iterate_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
+    for (int iteration = 0; iteration < settings.iterations; ++iteration) {
+      evaluate_trajectories(w);                                        // step 1
+      for (int i = 0; i < w.block_count; ++i) {
+        const SampleArrays s = sample_arrays(w, i);
+        ResidualSquares r;
+        r.obstacle = update_obstacle_directions(problem, w, s);        // step 2
+        r.velocity = update_velocity_directions(s);                    // step 3
+        r.acceleration = update_acceleration_directions(s);            // step 4
+        r.tracking = update_tracking_directions(problem, w, s);        // step 5
+        record_residual(r, s.b, iteration, result);                    // step 6
       }
-      H.noalias() = G.transpose() * w.Delta.leftCols(cols);  // h = G' S
-      Lambda += H;                                            // step 7
-      Rhs = Lambda + H;                                       // steps 8 and 9 (see above)
-      C_next = w.Bias.leftCols(cols);
-      C_next.noalias() += M11 * Rhs;
-      C_next.noalias() += M11_Qm * C;
-      C = C_next;
+      update_multiplier(w);                                            // step 7
+      update_trajectory(w);                                            // steps 8 and 9
     }
     for (int i = 0; i < w.block_count; ++i) {
       const int b = w.block_first + i;
