@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace occtrack::detail {
@@ -49,5 +50,14 @@ class SettingsChecker {
  private:
   std::string message_;
 };
+
+/// `settings` when settings.validate() holds; otherwise throws std::invalid_argument "WHO: <its message>".
+/// Constructors call it first, before building anything from the settings.
+template <typename Settings>
+const Settings& checked(const Settings& settings, const std::string& who) {
+  std::string error;
+  if (!settings.validate(&error)) throw std::invalid_argument(who + ": " + error);
+  return settings;
+}
 
 }  // namespace occtrack::detail

@@ -6,21 +6,22 @@
 
 namespace occtrack::planners::detail {
 
-void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
-                          const RankingSettings& ranking) {
-  std::string error;
-  if (!projection.validate(&error)) throw std::invalid_argument(planner + ": projection." + error);
-  if (!ranking.validate(&error)) throw std::invalid_argument(planner + ": ranking." + error);
-}
-
-void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
-                          const perception::Settings& perception, const RankingSettings& ranking) {
-  check_cycle_settings(planner, projection, ranking);
-  std::string error;
-  if (!perception.validate(&error)) throw std::invalid_argument(planner + ": perception." + error);
-  if (perception.nearest_count != projection.obstacles)
-    throw std::invalid_argument(planner + ": perception.nearest_count (" + std::to_string(perception.nearest_count) +
-                                ") must equal projection.obstacles (" + std::to_string(projection.obstacles) + ")");
+bool validate_cycle(const projection::Settings& projection, const perception::Settings* perception,
+                    const RankingSettings& ranking, std::string* error) {
+  std::string why;
+  auto fail = [&](const char* group) {
+    if (error) *error = group + why;
+    return false;
+  };
+  if (!projection.validate(&why)) return fail("projection.");
+  if (perception && !perception->validate(&why)) return fail("perception.");
+  if (!ranking.validate(&why)) return fail("ranking.");
+  if (perception && perception->nearest_count != projection.obstacles) {
+    why = "nearest_count (" + std::to_string(perception->nearest_count) + ") must equal projection.obstacles (" +
+          std::to_string(projection.obstacles) + ")";
+    return fail("perception.");
+  }
+  return true;
 }
 
 void finish(PlannerOutput& out, const CycleClock& clock) { out.compute_ms = clock.elapsed_ms(); }

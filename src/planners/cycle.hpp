@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/settings_checker.hpp"
 #include "occtrack/core/bernstein.hpp"
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/planner.hpp"
@@ -23,14 +24,21 @@
 
 namespace occtrack::planners::detail {
 
-/// Throws std::invalid_argument "PLANNER: FIELD ..." when the projection, perception or ranking settings
-/// are unusable or do not fit together (perception's nearest points are the optimizer's obstacles). Every
-/// planner calls it first in its constructor, before building anything from the settings.
-void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
-                          const perception::Settings& perception, const RankingSettings& ranking);
-/// The same for a planner without perception settings of its own (the follower).
-void check_cycle_settings(const std::string& planner, const projection::Settings& projection,
-                          const RankingSettings& ranking);
+/// True when the projection, perception (when given) and ranking settings are usable and fit together
+/// (perception's nearest points are the optimizer's obstacles). Otherwise false, and *error names the field
+/// with its group, e.g. "ranking.occlusion_stride (0) must be at least 1". Every planner's settings call it
+/// from their validate().
+bool validate_cycle(const projection::Settings& projection, const perception::Settings* perception,
+                    const RankingSettings& ranking, std::string* error);
+
+/// The optimizer of a planner that projects: factored once, with its problem and result buffers.
+struct Optimizer {
+  explicit Optimizer(const projection::Settings& settings)
+      : projector(settings), problem(projector.make_problem()), result(projector.make_result()) {}
+  projection::Projector<float> projector;
+  projection::Problem<float> problem;
+  projection::Result<float> result;
+};
 
 /// Wall time of one cycle, from construction.
 class CycleClock {

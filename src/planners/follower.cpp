@@ -7,36 +7,18 @@
 namespace occtrack::planners {
 
 bool FollowerSettings::validate(std::string* error) const {
-  try {
-    detail::check_cycle_settings("", projection, ranking);
-  } catch (const std::invalid_argument& e) {
-    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
-    return false;
-  }
-  return true;
+  return detail::validate_cycle(projection, nullptr, ranking, error);
 }
-
-namespace {
-const FollowerSettings& checked(const FollowerSettings& s) {
-  std::string error;
-  if (!s.validate(&error)) throw std::invalid_argument("follower: " + error);
-  return s;
-}
-}  // namespace
 
 struct Follower::Impl {
   detail::Context context;
-  projection::Projector<float> projector;
-  projection::Problem<float> problem;
-  projection::Result<float> result;
+  detail::Optimizer optimizer;
   PlanRecord record;  // record.frame is the cycle's frame
   Eigen::RowVectorXd line;
 
   explicit Impl(const FollowerSettings& s)
-      : context(checked(s).projection, perception::Settings{}, s.ranking),
-        projector(s.projection),
-        problem(projector.make_problem()),
-        result(projector.make_result()) {
+      : context(occtrack::detail::checked(s, "follower").projection, perception::Settings{}, s.ranking),
+        optimizer(s.projection) {
     line.resize(2 * s.projection.coefficients());
     record.xi.resize(line.size());
   }
@@ -58,11 +40,11 @@ void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
   if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
   s.context.line_to_goal(frame, s.line);
   const Eigen::Vector2d terminal_velocity = frame.target.tail<2>();
-  s.context.fill_row(s.problem, 0, s.line, frame, &terminal_velocity);
-  if (!s.projector.solve(s.problem, s.result, &error) || s.result.status != projection::SolveStatus::solved)
+  s.context.fill_row(s.optimizer.problem, 0, s.line, frame, &terminal_velocity);
+  if (!s.optimizer.projector.solve(s.optimizer.problem, s.optimizer.result, &error) || s.optimizer.result.status != projection::SolveStatus::solved)
     return detail::brake(out, s.record, clock, error.empty() ? "projection produced non-finite values" : error);
   out.candidates.clear();
-  s.record.xi = s.result.xi.row(0).cast<double>();
+  s.record.xi = s.optimizer.result.xi.row(0).cast<double>();
   // The follower does not rank; its record still carries what the ranking makes of its plan.
   const RankingTerms terms =
       s.context.ranking().evaluate(s.record.xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan);

@@ -7,7 +7,6 @@
 #include <random>
 #include <stdexcept>
 
-#include "../core/settings_checker.hpp"
 #include "cycle.hpp"
 #include "occtrack/projection/projector.hpp"
 
@@ -25,12 +24,6 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-const LearnedPolicySettings& checked(const LearnedPolicySettings& s) {
-  std::string error;
-  if (!s.validate(&error)) throw std::invalid_argument("planner " + learned_planner_name(s.variant) + ": " + error);
-  return s;
-}
-
 // bc projects nothing, so it has no stop plan: unprojected, a stop is an instant halt the robot cannot follow.
 bool ranks_stop(const LearnedPolicySettings& s) { return s.rank_stop && s.variant != policy::Variant::bc; }
 
@@ -41,7 +34,7 @@ projection::Settings batch_settings(const LearnedPolicySettings& s) {
 }
 
 policy::Model load_model(const LearnedPolicySettings& s) {
-  checked(s);  // before reading a file that settings refuse anyway
+  occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant));  // before reading a file
   const std::string path = s.model_path.empty() ? default_model_path(s.variant) : s.model_path;
   const std::string planner = learned_planner_name(s.variant);
   std::error_code ec;
@@ -67,14 +60,7 @@ bool LearnedPolicySettings::validate(std::string* error) const {
   occtrack::detail::SettingsChecker c;
   c.require(batch >= 1, "batch (", batch, ") must be at least 1");
   c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
-  if (!c.done(error)) return false;
-  try {
-    detail::check_cycle_settings("", batch_settings(*this), perception, ranking);
-  } catch (const std::invalid_argument& e) {
-    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
-    return false;
-  }
-  return true;
+  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, error);
 }
 
 std::string default_model_path(policy::Variant variant) {
@@ -109,7 +95,7 @@ struct LearnedPolicy::Impl {
   bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
-      : settings(checked(s)), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
+      : settings(occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant))), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
     settings.rank_stop = ranks_stop(s);
     const std::string planner = learned_planner_name(s.variant);
     model.require_variant(s.variant, planner);

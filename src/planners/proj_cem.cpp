@@ -6,7 +6,6 @@
 #include <random>
 #include <stdexcept>
 
-#include "../core/settings_checker.hpp"
 #include "cycle.hpp"
 #include "occtrack/projection/projector.hpp"
 
@@ -30,12 +29,6 @@ projection::Settings batch_settings(const ProjCemSettings& s) {
   return p;
 }
 
-const ProjCemSettings& checked(const ProjCemSettings& s) {
-  std::string error;
-  if (!s.validate(&error)) throw std::invalid_argument("projcem: " + error);
-  return s;
-}
-
 }  // namespace
 
 bool ProjCemSettings::validate(std::string* error) const {
@@ -47,22 +40,13 @@ bool ProjCemSettings::validate(std::string* error) const {
   c.non_negative(initial_std, "initial_std");
   c.non_negative(min_std, "min_std");
   c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
-  if (!c.done(error)) return false;
-  try {
-    detail::check_cycle_settings("", batch_settings(*this), perception, ranking);
-  } catch (const std::invalid_argument& e) {
-    if (error) *error = std::string(e.what()).substr(2);  // drop the empty planner name's ": "
-    return false;
-  }
-  return true;
+  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, error);
 }
 
 struct ProjCem::Impl {
   ProjCemSettings settings;
   detail::Context context;
-  projection::Projector<float> projector;
-  projection::Problem<float> problem;
-  projection::Result<float> result;
+  detail::Optimizer optimizer;
   PlanRecord record;  // record.frame is the cycle's frame
   std::mt19937_64 rng;
   Eigen::RowVectorXd previous;  // last plan, robot-centric at previous_origin
@@ -75,11 +59,9 @@ struct ProjCem::Impl {
   std::vector<int> order;
 
   explicit Impl(const ProjCemSettings& s)
-      : settings(checked(s)),
+      : settings(occtrack::detail::checked(s, "projcem")),
         context(batch_settings(s), s.perception, s.ranking),
-        projector(batch_settings(s)),
-        problem(projector.make_problem()),
-        result(projector.make_result()),
+        optimizer(batch_settings(s)),
         rng(s.seed) {
     const int n2 = 2 * s.projection.coefficients();
     for (Eigen::RowVectorXd* v : {&previous, &line, &mean, &stddev, &sample, &best, &scored, &elite_mean, &variance})
@@ -133,11 +115,11 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
       } else {
         for (int i = 0; i < 2 * n; ++i) s.sample(i) = s.mean(i) + s.stddev(i) * normal(s.rng);
       }
-      s.context.fill_row(s.problem, b, s.sample, frame);
+      s.context.fill_row(s.optimizer.problem, b, s.sample, frame);
     }
-    if (!s.projector.solve(s.problem, s.result, &error)) return detail::brake(out, s.record, clock, error);
+    if (!s.optimizer.projector.solve(s.optimizer.problem, s.optimizer.result, &error)) return detail::brake(out, s.record, clock, error);
     for (int b = 0; b < B; ++b) {
-      s.scored = s.result.xi.row(b).cast<double>();
+      s.scored = s.optimizer.result.xi.row(b).cast<double>();
       const RankingTerms terms =
           s.context.ranking().evaluate(s.scored, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
       s.costs[b] = terms.total;
@@ -152,11 +134,11 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
                       [&](int a, int b) { return s.costs[a] < s.costs[b]; });
     // Refit on the projected elites.
     s.elite_mean.setZero();
-    for (int e = 0; e < elites; ++e) s.elite_mean += s.result.xi.row(s.order[e]).cast<double>();
+    for (int e = 0; e < elites; ++e) s.elite_mean += s.optimizer.result.xi.row(s.order[e]).cast<double>();
     s.elite_mean /= elites;
     s.variance.setZero();
     for (int e = 0; e < elites; ++e)
-      s.variance += (s.result.xi.row(s.order[e]).cast<double>() - s.elite_mean).array().square().matrix();
+      s.variance += (s.optimizer.result.xi.row(s.order[e]).cast<double>() - s.elite_mean).array().square().matrix();
     s.mean = s.elite_mean;
     s.stddev = (s.variance / elites).array().sqrt().max(cfg.min_std).matrix();
   }
@@ -166,7 +148,7 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
   const int kept = std::min(cfg.candidates_kept, B);
   out.candidates.resize(static_cast<std::size_t>(kept));
   for (int c = 0; c < kept; ++c) {
-    s.scored = s.result.xi.row(c).cast<double>();
+    s.scored = s.optimizer.result.xi.row(c).cast<double>();
     s.context.world_positions(s.scored, frame, out.candidates[static_cast<std::size_t>(c)]);
   }
   s.previous = s.best;

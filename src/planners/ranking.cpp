@@ -32,16 +32,8 @@ bool RankingSettings::validate(std::string* error) const {
   return c.done(error);
 }
 
-namespace {
-const RankingSettings& checked(const RankingSettings& settings) {
-  std::string error;
-  if (!settings.validate(&error)) throw std::invalid_argument("ranking: " + error);
-  return settings;
-}
-}  // namespace
-
 Ranking::Ranking(const RankingSettings& settings, const projection::Settings& projection)
-    : settings_(checked(settings)),
+    : settings_(occtrack::detail::checked(settings, "ranking")),
       projection_(projection),
       basis_(core::bernstein_basis(projection.degree, projection.steps, projection.horizon)) {
   const int m = projection.steps;
