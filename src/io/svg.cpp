@@ -226,15 +226,7 @@ class SvgWriter {
     auto flush = [&] {
       if (run.empty()) return;
       if (run.size() == 1) run.push_back(run.front());
-      const std::vector<Vec2> thin = simplify(run, kSimplifyPx);
-      out_ += "<polyline class=\"";
-      out_ += css_class;
-      out_ += "\" points=\"";
-      for (std::size_t k = 0; k < thin.size(); ++k) {
-        if (k > 0) out_ += ' ';
-        xy(thin[k]);
-      }
-      out_ += "\"/>\n";
+      with_points("polyline", simplify(run, kSimplifyPx), css_class);
       run.clear();
     };
     for (const Vec2& p : world) {
@@ -255,12 +247,19 @@ class SvgWriter {
   }
 
   void polygon(const std::vector<Vec2>& corners_px, const char* css_class) {
-    out_ += "<polygon class=\"";
+    with_points("polygon", corners_px, css_class);
+  }
+
+  /// An element with a points="x,y x,y ..." attribute (polyline, polygon), in pixels.
+  void with_points(const char* element, const std::vector<Vec2>& points_px, const char* css_class) {
+    out_ += '<';
+    out_ += element;
+    out_ += " class=\"";
     out_ += css_class;
     out_ += "\" points=\"";
-    for (std::size_t k = 0; k < corners_px.size(); ++k) {
+    for (std::size_t k = 0; k < points_px.size(); ++k) {
       if (k > 0) out_ += ' ';
-      xy(corners_px[k]);
+      xy(points_px[k]);
     }
     out_ += "\"/>\n";
   }
