@@ -18,6 +18,7 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/io/svg.hpp"
 #include "occtrack/sim/episode.hpp"
+#include "occtrack/sim/metrics.hpp"
 
 namespace fs = std::filesystem;
 
@@ -84,7 +85,7 @@ int run(const SuiteOptions& o) {
   for (auto& t : threads) t.join();
   if (!failure.empty()) throw std::runtime_error(failure);
 
-  const io::SuiteResult result = io::summarize_suite(suite_name, o.episode.planner, metrics);
+  const core::SuiteResult result = sim::summarize_suite(suite_name, o.episode.planner, metrics);
   std::cout << io::suite_table({result});
   if (!o.json_path.empty()) {
     std::ofstream out(o.json_path);
