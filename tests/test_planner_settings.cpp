@@ -64,7 +64,8 @@ std::vector<Sentinel<planners::RankingSettings>> ranking_sentinels(const std::st
       {prefix + "near_clearance", [](R& r) { r.near_clearance = -0.1; }},
       {prefix + "band.min", [](R& r) { r.band.min = 0.0; }},
       {prefix + "band.reference", [](R& r) { r.band.reference = kNaN; }},
-      {prefix + "band.max", [](R& r) { r.band.max = 1.5; }},  // below the reference
+      // Below the reference: "<prefix>band.reference (2) must not exceed band.max (1.5)".
+      {"band.max (1.5)", [](R& r) { r.band.max = 1.5; }},
   };
 }
 
