@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "../core/name_table.hpp"
 #include "occtrack/io/error.hpp"
 #include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
@@ -25,22 +26,17 @@ using nlohmann::json;
 // ---------------------------------------------------------------------------------------------------------
 // World kinds and settings.
 
-const char* to_string(DemonstrationWorld world) {
-  switch (world) {
-    case DemonstrationWorld::forest: return "forest";
-    case DemonstrationWorld::boxes: return "boxes";
-    case DemonstrationWorld::mixed: return "mixed";
-    case DemonstrationWorld::dynamic: return "dynamic";
-  }
-  return "?";
-}
+// One table for both directions.
+constexpr std::pair<DemonstrationWorld, const char*> kDemonstrationWorldNames[] = {
+    {DemonstrationWorld::forest, "forest"},
+    {DemonstrationWorld::boxes, "boxes"},
+    {DemonstrationWorld::mixed, "mixed"},
+    {DemonstrationWorld::dynamic, "dynamic"}};
+
+const char* to_string(DemonstrationWorld world) { return occtrack::detail::name_of(kDemonstrationWorldNames, world); }
 
 std::optional<DemonstrationWorld> parse_demonstration_world(std::string_view text) {
-  if (text == "forest") return DemonstrationWorld::forest;
-  if (text == "boxes") return DemonstrationWorld::boxes;
-  if (text == "mixed") return DemonstrationWorld::mixed;
-  if (text == "dynamic") return DemonstrationWorld::dynamic;
-  return std::nullopt;
+  return occtrack::detail::value_of(kDemonstrationWorldNames, text);
 }
 
 namespace {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <utility>
 
+#include "../core/name_table.hpp"
 #include "../core/settings_checker.hpp"
 
 namespace occtrack::sim {
@@ -40,17 +41,9 @@ void area(Checker& c, double width, double height) {
 
 }  // namespace
 
-const char* to_string(WorldKind kind) {
-  for (const auto& [k, name] : kWorldKindNames)
-    if (k == kind) return name;
-  return "?";
-}
+const char* to_string(WorldKind kind) { return occtrack::detail::name_of(kWorldKindNames, kind); }
 
-std::optional<WorldKind> parse_world_kind(std::string_view text) {
-  for (const auto& [kind, name] : kWorldKindNames)
-    if (text == name) return kind;
-  return std::nullopt;
-}
+std::optional<WorldKind> parse_world_kind(std::string_view text) { return occtrack::detail::value_of(kWorldKindNames, text); }
 
 bool GeneratorSettings::validate(std::string* error) const {
   Checker c;
