@@ -1,20 +1,21 @@
 #include "learning/projection.hpp"
 
-#include <Eigen/LU>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "occtrack/core/bernstein.hpp"
+#include "occtrack/projection/kkt.hpp"
 
 namespace occtrack::learning {
 
 using torch::Tensor;
 
 // ------------------------------------------------------------------------------------------------
-// Constants (spec "Initial guess" and step 9's KKT matrix), factored in double exactly as
-// projection::Projector does, so that both start from the same numbers.
+// Constants: the basis and the blocks of the inverse KKT matrices (spec "Initial guess" and step 9) from
+// projection::KktFactors, the factoring Projector and LiteralProjector use, so that all start from the same
+// numbers.
 
 namespace {
 
@@ -39,25 +40,7 @@ ProjectionConstants::ProjectionConstants(const projection::Settings& s, torch::D
   const int n = coefficients, m = steps;
   const core::BernsteinBasis b = core::bernstein_basis(settings.degree, m, settings.horizon);
 
-  const auto& rho = settings.rho;
-  const Eigen::MatrixXd PtP = b.P.transpose() * b.P;
-  const Eigen::MatrixXd Qm = rho.obstacle * settings.obstacles * PtP + rho.tracking * PtP +
-                             rho.velocity * b.Pd.transpose() * b.Pd + rho.acceleration * b.Pdd.transpose() * b.Pdd;
-  Eigen::MatrixXd A_eq(4, n);
-  A_eq << b.P.row(0), b.Pd.row(0), b.P.row(m - 1), b.Pd.row(m - 1);
-  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(n + 4, n + 4);
-  kkt.topLeftCorner(n, n) = Qm + rho.projection * Eigen::MatrixXd::Identity(n, n);
-  kkt.topRightCorner(n, 4) = A_eq.transpose();
-  kkt.bottomLeftCorner(4, n) = A_eq;
-  const Eigen::MatrixXd inverse = kkt.fullPivLu().inverse();
-
-  Eigen::MatrixXd A_init(6, n);
-  A_init << A_eq, b.P.row(settings.via_step_1), b.P.row(settings.via_step_2);
-  Eigen::MatrixXd kkt_init = Eigen::MatrixXd::Zero(n + 6, n + 6);
-  kkt_init.topLeftCorner(n, n) = b.Pdd.transpose() * b.Pdd;
-  kkt_init.topRightCorner(n, 6) = A_init.transpose();
-  kkt_init.bottomLeftCorner(6, n) = A_init;
-  const Eigen::MatrixXd inverse_init = kkt_init.fullPivLu().inverse();
+  const projection::KktFactors<double> kkt(settings);
 
   Eigen::MatrixXd G(3 * m, n);
   G << b.P, b.Pd, b.Pdd;
@@ -68,10 +51,10 @@ ProjectionConstants::ProjectionConstants(const projection::Settings& s, torch::D
   Pd = to_tensor(b.Pd, options);
   Pdd = to_tensor(b.Pdd, options);
   basis = to_tensor(G, options);
-  initial_guess = to_tensor(inverse_init.topRightCorner(n, 6), options);
-  kkt_inverse_11 = to_tensor(inverse.topLeftCorner(n, n), options);
-  kkt_inverse_12 = to_tensor(inverse.topRightCorner(n, 4), options);
-  kkt_inverse_11_q = to_tensor(inverse.topLeftCorner(n, n) * Qm, options);
+  initial_guess = to_tensor(kkt.initial_guess, options);
+  kkt_inverse_11 = to_tensor(kkt.M11, options);
+  kkt_inverse_12 = to_tensor(kkt.M12, options);
+  kkt_inverse_11_q = to_tensor(kkt.M11_Qm, options);
 
   const bool single = dtype == torch::kFloat;
   nudge = single ? 1e-18 : 1e-150;

@@ -21,12 +21,10 @@
 // thousand samples: larger batches cost almost nothing extra there. Its saved tensors go through
 // save_for_backward, so they are freed when backward() returns (unless retain_graph).
 //
-// Step 9 is evaluated in the rearranged form of projection::Projector (src/projection/projector.cpp):
-// with h = -(rho_o P' sum_j r_o,j + rho_r P' r_r + rho_v Pd' r_v + rho_a Pdd' r_a), step 7 is lambda += h and
-// step 9 is xi_{k+1} = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + M11 rho_p xi_bar + M12 b_eq, where
-// [M11 M12] are the top rows of the inverse KKT matrix. It is the spec's arithmetic exactly (the spec's
-// right-hand side G' W e equals h + (Q - rho_p I) xi_k), without the float cancellation of N p against
-// sum_j e_o,j.
+// Steps 7 to 9 are evaluated in the rearranged form that src/projection/projector.cpp explains, with the
+// blocks [M11 M12] of the inverse KKT matrix from projection::KktFactors (occtrack/projection/kkt.hpp): with
+// h = -(rho_o P' sum_j r_o,j + rho_r P' r_r + rho_v Pd' r_v + rho_a Pdd' r_a), lambda += h and
+// xi_{k+1} = M11 (lambda_{k+1} + h) + M11 (Q - rho_p I) xi_k + M11 rho_p xi_bar + M12 b_eq.
 //
 // unit(0) = (1, 0): as in the Eigen code, every offset w gets `nudge` added to its x entry and its norm is
 // taken as sqrt(max(|w|^2, nudge^2)), so values and gradients stay finite. The gradient of unit(w) is

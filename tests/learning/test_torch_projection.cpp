@@ -15,6 +15,7 @@
 #include "../test_helpers.hpp"
 #include "learning/projection.hpp"
 #include "occtrack/io/projection_case.hpp"
+#include "occtrack/projection/kkt.hpp"
 #include "occtrack/projection/problem_generator.hpp"
 
 namespace fs = std::filesystem;
@@ -286,6 +287,19 @@ TEST_F(TorchProjection, ZeroOffsetsGiveFiniteGradients) {
         EXPECT_TRUE(torch::isfinite(grads[f]).all().item<bool>()) << kLearnable[f].first;
     }
   }
+}
+
+// The torch constants are projection::KktFactors' blocks, the factoring the Eigen projectors use: in double,
+// exactly the same numbers.
+TEST_F(TorchProjection, ConstantsHoldTheSharedKktFactors) {
+  projection::Settings s = small_settings(2, 7);
+  s.rho.velocity = 0.7;
+  const ProjectionConstants c(s, torch::kDouble, torch::kCPU);
+  const projection::KktFactors<double> kkt(s);
+  EXPECT_EQ(worst_error(c.kkt_inverse_11, kkt.M11), 0.0);
+  EXPECT_EQ(worst_error(c.kkt_inverse_12, kkt.M12), 0.0);
+  EXPECT_EQ(worst_error(c.kkt_inverse_11_q, kkt.M11_Qm), 0.0);
+  EXPECT_EQ(worst_error(c.initial_guess, kkt.initial_guess), 0.0);
 }
 
 // No obstacles at all (N = 0) is a valid problem.
