@@ -10,14 +10,14 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <time.h>
 #include <vector>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
+#include "occtrack/core/timing.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/planners/learned.hpp"
@@ -44,24 +44,6 @@ struct Options {
   std::uint64_t seed = 1;
 };
 
-struct Summary {
-  double median = 0, p99 = 0, mean = 0, min = 0;
-};
-
-Summary summarize(std::vector<double> ms) {
-  Summary s;
-  if (ms.empty()) return s;
-  std::sort(ms.begin(), ms.end());
-  const std::size_t n = ms.size();
-  s.median = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
-  s.p99 = ms[std::min(n - 1, static_cast<std::size_t>(0.99 * n))];
-  s.min = ms.front();
-  double sum = 0;
-  for (double x : ms) sum += x;
-  s.mean = sum / n;
-  return s;
-}
-
 // The given scenario, else the default one from the working directory or from the source tree (the shipped
 // models' folder sits beside scenarios/).
 std::string resolve_scenario(const std::string& given) {
@@ -73,7 +55,6 @@ std::string resolve_scenario(const std::string& given) {
   throw std::runtime_error(std::string(kDefaultScenario) + ": not found (pass --scenario FILE)");
 }
 
-// Planner inputs along a follower's drive through the scenario, one per planning period.
 // CPU time of the calling thread: unlike wall time, it does not count the time slices other processes take on
 // a shared machine.
 double thread_cpu_ms() {
@@ -82,6 +63,7 @@ double thread_cpu_ms() {
   return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
 }
 
+// Planner inputs along a follower's drive through the scenario, one per planning period.
 struct Recording {
   std::vector<core::Scan> scans;
   std::vector<planners::PlannerInput> inputs;
@@ -166,9 +148,10 @@ int run(const Options& o) {
     projection.push_back(t.projection);
     ranking.push_back(t.ranking);
   }
-  const Summary cycle = summarize(total), cycle_cpu = summarize(cpu);
-  const Summary sp = summarize(perception), sn = summarize(pointnet), sd = summarize(decoder),
-                sj = summarize(projection), sr = summarize(ranking);
+  const core::TimingSummary cycle = core::summarize_timings(total), cycle_cpu = core::summarize_timings(cpu);
+  const core::TimingSummary sp = core::summarize_timings(perception), sn = core::summarize_timings(pointnet),
+                            sd = core::summarize_timings(decoder), sj = core::summarize_timings(projection),
+                            sr = core::summarize_timings(ranking);
 
   const auto& net = planner->model().network();
   // The rows solved per cycle: the B samples, the last plan and the stop plan (planners/learned.hpp).
@@ -214,11 +197,7 @@ int run(const Options& o) {
         {"split_median_ms",
          {{"perception", sp.median}, {"pointnet", sn.median}, {"decoder", sd.median}, {"projection", sj.median},
           {"ranking", sr.median}}}};
-    std::ofstream out(o.json_path);
-    if (!(out << doc.dump(2) << "\n")) {
-      std::cerr << "occtrack bench policy: " << o.json_path << ": cannot write the file\n";
-      return kExitInputError;
-    }
+    if (!write_text_file("occtrack bench policy", o.json_path, doc.dump(2) + "\n")) return kExitInputError;
   }
   return kExitOk;
 }
@@ -226,36 +205,22 @@ int run(const Options& o) {
 }  // namespace
 
 void add_bench_policy_command(CLI::App& bench, int& exit_code) {
-  auto o = std::make_shared<Options>();
-  CLI::App* cmd = bench.add_subcommand("policy", "Time the learned policy's planning cycle on realistic scans");
+  auto [cmd, o] = add_command<Options>(bench, "policy", "Time the learned policy's planning cycle on realistic scans");
   auto* model = cmd->add_option("--model", o->model, "Model file (default: the shipped model of the variant)");
   cmd->add_flag("--random", o->random, "Use random weights of the default sizes instead of a model file")
       ->excludes(model);
-  cmd->add_option("--variant", o->variant, "Model variant")
-      ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
-      ->capture_default_str();
-  cmd->add_option("--batch", o->batch, "Latent samples per cycle (B)")->check(CLI::Range(1, 100000))->capture_default_str();
+  add_choice_option(cmd, "--variant", o->variant, "Model variant", {"cvae", "bc", "fixed-q"});
+  add_bounded_option(cmd, "--batch", o->batch, "Latent samples per cycle (B)", 1, 100000);
   cmd->add_flag("--no-last-plan{false}", o->keep_last_plan, "Project the B samples without the last plan");
   cmd->add_flag("--no-stop{false}", o->rank_stop, "Project the B samples without the stop plan");
-  cmd->add_option("--iterations", o->iterations, "Projection iterations per cycle (K)")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  cmd->add_option("--repeats", o->repeats, "Timed cycles")->check(CLI::Range(1, 10000000))->capture_default_str();
+  add_bounded_option(cmd, "--iterations", o->iterations, "Projection iterations per cycle (K)", 1, 100000);
+  add_bounded_option(cmd, "--repeats", o->repeats, "Timed cycles", 1, 10000000);
   cmd->add_option("--scenario", o->scenario, std::string("Scenario whose scans are replayed (default ") +
                                                   kDefaultScenario + ")");
-  cmd->add_option("--seconds", o->seconds, "Seconds of the follower's drive recorded")
-      ->check(CLI::Range(0.05, 3600.0))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--seconds", o->seconds, "Seconds of the follower's drive recorded", 0.05, 3600.0);
   cmd->add_option("--seed", o->seed, "Seed of the latent samples (and of the random weights)")->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
-  cmd->callback([o, &exit_code]() {
-    try {
-      exit_code = run(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack bench policy: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 
 }  // namespace occtrack::app

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <thread>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
 #include "occtrack/io/results.hpp"
@@ -60,10 +61,7 @@ int run(const SuiteOptions& o) {
     for (std::size_t i = next++; i < scenarios.size(); i = next++) {
       try {
         auto planner = planners::make_planner(o.episode.planner, o.episode.planner_options);
-        sim::EpisodeSettings settings;
-        settings.delay_by_compute = o.episode.delay;
-        settings.seed = o.episode.sensor_seed;
-        const sim::EpisodeResult r = sim::run_episode(scenarios[i], *planner, settings);
+        const sim::EpisodeResult r = sim::run_episode(scenarios[i], *planner, o.episode.settings());
         metrics[i] = r.metrics;
         if (!o.svg_dir.empty()) {
           std::ofstream svg(fs::path(o.svg_dir) / (scenarios[i].name + "." + planner->name() + ".svg"));
@@ -87,34 +85,22 @@ int run(const SuiteOptions& o) {
 
   const core::SuiteResult result = sim::summarize_suite(suite_name, o.episode.planner, metrics);
   std::cout << io::suite_table({result});
-  if (!o.json_path.empty()) {
-    std::ofstream out(o.json_path);
-    if (!(out << io::suite_json(result) << "\n")) {
-      std::cerr << "occtrack bench suite: " << o.json_path << ": cannot write the file\n";
-      return kExitInputError;
-    }
-  }
+  if (!o.json_path.empty() && !write_text_file("occtrack bench suite", o.json_path, io::suite_json(result) + "\n"))
+    return kExitInputError;
   return kExitOk;
 }
 
 }  // namespace
 
 void add_bench_suite_command(CLI::App& bench, int& exit_code) {
-  auto o = std::make_shared<SuiteOptions>();
-  CLI::App* cmd = bench.add_subcommand("suite", "Run a benchmark suite with a planner and print the paper's table");
+  auto [cmd, o] =
+      add_command<SuiteOptions>(bench, "suite", "Run a benchmark suite with a planner and print the paper's table");
   cmd->add_option("suite", o->suite, "Suite folder, or a name under scenarios/ (e.g. static-1ms)")->required();
   add_episode_options(cmd, o->episode);
-  cmd->add_option("--jobs", o->jobs, "Episodes run at the same time")->check(CLI::Range(1, 256))->capture_default_str();
+  add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
   cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary} as JSON");
   cmd->add_option("--svg-dir", o->svg_dir, "Write one figure per episode into this folder");
-  cmd->callback([o, &exit_code]() {
-    try {
-      exit_code = run(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack bench suite: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 
 }  // namespace occtrack::app

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
 #include "occtrack/core/bernstein.hpp"
 #include "occtrack/io/projection_case.hpp"
@@ -156,23 +157,16 @@ int run(const Options& o) {
 }  // namespace
 
 void add_project_command(CLI::App& app, int& exit_code) {
-  auto options = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("project", "Solve a projection case file and compare it with its expected outputs");
+  auto [cmd, options] =
+      add_command<Options>(app, "project", "Solve a projection case file and compare it with its expected outputs");
   cmd->add_option("case", options->case_path, "Case file (occtrack.projection-case.v1 JSON)")->required();
-  cmd->add_option("--precision", options->precision, "Arithmetic of the solve")
-      ->check(CLI::IsMember({"double", "float"}))
-      ->capture_default_str();
+  add_choice_option(cmd, "--precision", options->precision, "Arithmetic of the solve", {"double", "float"});
   cmd->add_option("--out", options->out_path, "Write the result JSON here instead of standard output");
   cmd->add_option("--tolerance", options->tolerance,
                   "Largest accepted error against expected (default 1e-9 for double, 5e-2 for float)")
       ->check(CLI::NonNegativeNumber);
-  cmd->callback([options, &exit_code]() {
-    try {
-      exit_code = options->precision == "float" ? run<float>(*options) : run<double>(*options);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack project: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
+  set_command_body(cmd, exit_code, [options] {
+    return options->precision == "float" ? run<float>(*options) : run<double>(*options);
   });
 }
 

@@ -2,9 +2,8 @@
 //
 // Runs one closed-loop episode with a progress display and prints its metrics.
 #include <cstdio>
-#include <fstream>
-#include <iostream>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
 #include "occtrack/io/results.hpp"
@@ -21,19 +20,12 @@ struct RunOptions {
   EpisodeCliOptions episode;
 };
 
-bool write_file(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  if (out << text) return true;
-  std::cerr << "occtrack run: " << path << ": cannot write the file\n";
-  return false;
-}
+constexpr const char* kWho = "occtrack run";
 
 int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
   auto planner = planners::make_planner(o.episode.planner, o.episode.planner_options);
-  sim::EpisodeSettings settings;
-  settings.delay_by_compute = o.episode.delay;
-  settings.seed = o.episode.sensor_seed;
+  const sim::EpisodeSettings settings = o.episode.settings();
   Progress progress(scenario.name + " (" + planner->name() + ")");
   const sim::EpisodeResult result =
       sim::run_episode(scenario, *planner, settings, [&](double f) { progress.update(f); });
@@ -51,9 +43,9 @@ int run(const RunOptions& o) {
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,
               m.target_out_of_range_s);
   bool ok = true;
-  if (!o.json_path.empty()) ok = write_file(o.json_path, io::episode_json(m) + "\n") && ok;
+  if (!o.json_path.empty()) ok = write_text_file(kWho, o.json_path, io::episode_json(m) + "\n") && ok;
   if (!o.svg_path.empty()) {
-    ok = write_file(o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
+    ok = write_text_file(kWho, o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
     if (ok) std::printf("  figure           %s\n", o.svg_path.c_str());
   }
   return ok ? kExitOk : kExitInputError;
@@ -62,20 +54,12 @@ int run(const RunOptions& o) {
 }  // namespace
 
 void add_run_command(CLI::App& app, int& exit_code) {
-  auto o = std::make_shared<RunOptions>();
-  CLI::App* cmd = app.add_subcommand("run", "Run one closed-loop tracking episode and print its metrics");
+  auto [cmd, o] = add_command<RunOptions>(app, "run", "Run one closed-loop tracking episode and print its metrics");
   cmd->add_option("scenario", o->scenario_path, "Scenario file (occtrack.scenario.v1 YAML)")->required();
   add_episode_options(cmd, o->episode);
   cmd->add_option("--svg", o->svg_path, "Write a top-down figure of the episode");
   cmd->add_option("--json", o->json_path, "Write the episode's metrics as JSON");
-  cmd->callback([o, &exit_code]() {
-    try {
-      exit_code = run(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack run: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 
 }  // namespace occtrack::app

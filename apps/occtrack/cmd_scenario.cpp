@@ -12,6 +12,7 @@
 #include <iostream>
 #include <optional>
 
+#include "cli_support.hpp"
 #include "commands.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
@@ -160,11 +161,9 @@ int run_single(const Options& o) {
 }  // namespace
 
 void add_scenario_command(CLI::App& app, int& exit_code) {
-  CLI::App* scenario = app.add_subcommand("scenario", "Make scenario files (worlds, target paths, robot start)");
-  scenario->require_subcommand(1);
-  auto o = std::make_shared<Options>();
-  CLI::App* cmd = scenario->add_subcommand(
-      "generate",
+  CLI::App* scenario = add_command_group(app, "scenario", "Make scenario files (worlds, target paths, robot start)");
+  auto [cmd, o] = add_command<Options>(
+      *scenario, "generate",
       "Write the benchmark suites (--suite) or one scenario (--kind) from fixed seeds. Seeds 1000-1999 are the "
       "benchmark's; generate training data from other seeds");
   CLI::Option* suite = cmd->add_option("--suite", o->suite,
@@ -182,26 +181,16 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 19));
   cmd->add_option("--duration", o->duration, "Seconds of target motion per episode (default: the suite's, or 150)")
       ->check(CLI::Range(0.5, 36000.0));
-  cmd->add_option("--target-speed", o->target_speed, "Largest target speed, m/s (--kind)")
-      ->check(CLI::Range(0.05, 20.0))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--target-speed", o->target_speed, "Largest target speed, m/s (--kind)", 0.05, 20.0);
   cmd->add_option("--obstacles", o->obstacles, "Static obstacles (--kind; default: as in the suites' worlds)")
       ->check(CLI::Range(0, 100000));
-  cmd->add_option("--moving-obstacles", o->moving_obstacles, "Moving obstacles at 0.7 m/s (--kind)")
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  cmd->callback([o, &exit_code]() {
-    try {
-      if (o->suite.empty() == o->kind.empty()) {
-        std::cerr << "occtrack scenario generate: give one of --suite or --kind\n";
-        exit_code = kExitInputError;
-        return;
-      }
-      exit_code = o->suite.empty() ? run_single(*o) : run_suites(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack scenario generate: " << e.what() << "\n";
-      exit_code = kExitInputError;
+  add_bounded_option(cmd, "--moving-obstacles", o->moving_obstacles, "Moving obstacles at 0.7 m/s (--kind)", 0, 1000);
+  set_command_body(cmd, exit_code, [o] {
+    if (o->suite.empty() == o->kind.empty()) {
+      std::cerr << "occtrack scenario generate: give one of --suite or --kind\n";
+      return kExitInputError;
     }
+    return o->suite.empty() ? run_single(*o) : run_suites(*o);
   });
 }
 

@@ -7,7 +7,9 @@
 #include <string>
 #include <unistd.h>
 
+#include "cli_support.hpp"
 #include "occtrack/planners/planner.hpp"
+#include "occtrack/sim/episode.hpp"
 
 namespace occtrack::app {
 
@@ -16,6 +18,14 @@ struct EpisodeCliOptions {
   planners::PlannerOptions planner_options;
   bool delay = false;
   std::uint64_t sensor_seed = 1;
+
+  /// The episode's settings these options choose (the rest at their defaults).
+  sim::EpisodeSettings settings() const {
+    sim::EpisodeSettings s;
+    s.delay_by_compute = delay;
+    s.seed = sensor_seed;
+    return s;
+  }
 };
 
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
@@ -25,14 +35,12 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_option("--seed", o.planner_options.seed, "Planner's random seed")->capture_default_str();
   cmd->add_option("--samples", o.planner_options.samples, "Proj-CEM samples per iteration (0: its default)")
       ->check(CLI::Range(0, 100000));
-  cmd->add_option("--threads", o.planner_options.threads, "Threads a planner may use (Proj-CEM's projection)")
-      ->check(CLI::Range(1, 256))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--threads", o.planner_options.threads, "Threads a planner may use (Proj-CEM's projection)",
+                     1, 256);
   cmd->add_option("--model", o.planner_options.model,
                   "Learned planners (cvae, bc, cvae-fixed-q): model file (default: the shipped model of the variant)");
-  cmd->add_option("--batch", o.planner_options.batch, "Learned planners: latent samples per cycle (5 on small hardware)")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--batch", o.planner_options.batch,
+                     "Learned planners: latent samples per cycle (5 on small hardware)", 1, 100000);
   cmd->add_flag("--no-last-plan{false}", o.planner_options.keep_last_plan,
                 "Learned planners: rank only the B samples, not also the last plan shifted to now (the paper's policy)");
   cmd->add_flag("--no-stop{false}", o.planner_options.rank_stop,

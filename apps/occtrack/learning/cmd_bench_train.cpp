@@ -4,14 +4,16 @@
 // Times one whole training step (forward through the networks and the K unrolled projection iterations,
 // loss, backward, Adam) on synthetic rows of the right shapes, with the hand-written projection backward
 // (project_fast) and with autograd through the plain loop (project_plain), side by side, and their ratio.
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <utility>
 
+#include "../cli_support.hpp"
 #include "../commands.hpp"
 #include "allocation.hpp"
+#include "occtrack/core/timing.hpp"
 #include "learning/dataset.hpp"
 #include "learning/trainer.hpp"
 
@@ -34,7 +36,7 @@ struct BenchTrainOptions {
 };
 
 struct StepTiming {
-  double median_ms = 0, min_ms = 0, mean_ms = 0;
+  core::TimingSummary ms;
   double loss = 0;
 };
 
@@ -72,13 +74,7 @@ StepTiming time_steps(const learning::Dataset& data, const learning::Batch& batc
     if (r >= o.warmup) ms.push_back(elapsed);
     loss = l.total.item<double>();
   }
-  std::sort(ms.begin(), ms.end());
-  StepTiming t;
-  t.median_ms = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
-  t.min_ms = ms.front();
-  for (double x : ms) t.mean_ms += x / ms.size();
-  t.loss = loss;
-  return t;
+  return {core::summarize_timings(std::move(ms)), loss};
 }
 
 int run(const BenchTrainOptions& o) {
@@ -106,25 +102,25 @@ int run(const BenchTrainOptions& o) {
   if (!o.json) {
     std::printf("training step (%s), batch %lld, %d obstacle points, %d cloud points, on %s\n", o.variant.c_str(),
                 static_cast<long long>(o.batch), o.obstacles, o.cloud_points, hardware.c_str());
-    std::printf("  networks only (bc, no projection): median %.1f ms (min %.1f)\n", networks.median_ms,
-                networks.min_ms);
+    std::printf("  networks only (bc, no projection): median %.1f ms (min %.1f)\n", networks.ms.median,
+                networks.ms.min);
   }
   for (int k : o.iterations) {
     const StepTiming fast = time_steps(data, batch, o, variant, k, false, device);
     StepTiming plain;
     if (!o.skip_plain) plain = time_steps(data, batch, o, variant, k, true, device);
     if (o.json) {
-      nlohmann::json r = {{"iterations", k}, {"fast", {{"median_ms", fast.median_ms}, {"min_ms", fast.min_ms}}}};
+      nlohmann::json r = {{"iterations", k}, {"fast", {{"median_ms", fast.ms.median}, {"min_ms", fast.ms.min}}}};
       if (!o.skip_plain) {
-        r["plain"] = {{"median_ms", plain.median_ms}, {"min_ms", plain.min_ms}};
-        r["plain_over_fast"] = plain.median_ms / fast.median_ms;
+        r["plain"] = {{"median_ms", plain.ms.median}, {"min_ms", plain.ms.min}};
+        r["plain_over_fast"] = plain.ms.median / fast.ms.median;
       }
       results.push_back(r);
     } else {
-      std::printf("  K = %3d: fast median %.1f ms (min %.1f)", k, fast.median_ms, fast.min_ms);
+      std::printf("  K = %3d: fast median %.1f ms (min %.1f)", k, fast.ms.median, fast.ms.min);
       if (!o.skip_plain)
-        std::printf(", plain median %.1f ms (min %.1f); plain / fast = %.2f", plain.median_ms, plain.min_ms,
-                    plain.median_ms / fast.median_ms);
+        std::printf(", plain median %.1f ms (min %.1f); plain / fast = %.2f", plain.ms.median, plain.ms.min,
+                    plain.ms.median / fast.ms.median);
       std::printf("  [%d steps each]\n", o.repeats);
     }
   }
@@ -133,7 +129,7 @@ int run(const BenchTrainOptions& o) {
                                 {"obstacles", o.obstacles},  {"cloud_points", o.cloud_points},
                                 {"device", device.str()},    {"hardware", hardware}, {"threads", torch::get_num_threads()},
                                 {"repeats", o.repeats},
-                                {"networks_only", {{"median_ms", networks.median_ms}, {"min_ms", networks.min_ms}}},
+                                {"networks_only", {{"median_ms", networks.ms.median}, {"min_ms", networks.ms.min}}},
                                 {"results", results}};
     std::cout << out.dump() << "\n";
   }
@@ -143,33 +139,26 @@ int run(const BenchTrainOptions& o) {
 }  // namespace
 
 void add_bench_train_command(CLI::App& bench, int& exit_code) {
-  auto o = std::make_shared<BenchTrainOptions>();
-  CLI::App* cmd = bench.add_subcommand(
-      "train-step", "Time one training step (forward, loss, backward, Adam) with the fast and the plain projection");
-  cmd->add_option("--batch", o->batch, "Rows per step")->check(CLI::Range(int64_t{1}, int64_t{1} << 20))->capture_default_str();
+  auto [cmd, o] = add_command<BenchTrainOptions>(
+      bench, "train-step",
+      "Time one training step (forward, loss, backward, Adam) with the fast and the plain projection");
+  add_bounded_option(cmd, "--batch", o->batch, "Rows per step", int64_t{1}, int64_t{1} << 20);
   cmd->add_option("--iterations", o->iterations, "Projection iterations K (a list: 20,50)")
       ->delimiter(',')
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  cmd->add_option("--obstacles", o->obstacles, "Obstacle points per row (N)")->check(CLI::Range(0, 100000))->capture_default_str();
-  cmd->add_option("--cloud-points", o->cloud_points, "Cloud points per row (C)")->check(CLI::Range(1, 100000))->capture_default_str();
+  add_bounded_option(cmd, "--obstacles", o->obstacles, "Obstacle points per row (N)", 0, 100000);
+  add_bounded_option(cmd, "--cloud-points", o->cloud_points, "Cloud points per row (C)", 1, 100000);
   cmd->add_option("--device", o->device, "cpu, cuda or cuda:I")->capture_default_str();
-  cmd->add_option("--variant", o->variant, "cvae or fixed-q (bc has no projection: its time is the 'networks only' line)")
-      ->check(CLI::IsMember({"cvae", "fixed-q"}))
-      ->capture_default_str();
-  cmd->add_option("--repeats", o->repeats, "Timed steps per configuration")->check(CLI::Range(1, 100000))->capture_default_str();
-  cmd->add_option("--warmup", o->warmup, "Untimed steps first")->check(CLI::Range(0, 1000))->capture_default_str();
-  cmd->add_option("--threads", o->threads, "CPU threads for torch (0: torch's default)")->check(CLI::Range(0, 1024))->capture_default_str();
+  add_choice_option(cmd, "--variant", o->variant,
+                    "cvae or fixed-q (bc has no projection: its time is the 'networks only' line)",
+                    {"cvae", "fixed-q"});
+  add_bounded_option(cmd, "--repeats", o->repeats, "Timed steps per configuration", 1, 100000);
+  add_bounded_option(cmd, "--warmup", o->warmup, "Untimed steps first", 0, 1000);
+  add_bounded_option(cmd, "--threads", o->threads, "CPU threads for torch (0: torch's default)", 0, 1024);
   cmd->add_flag("--skip-plain", o->skip_plain, "Time the fast projection only (the plain one needs far more memory)");
   cmd->add_flag("--json", o->json, "Print one JSON object instead of text");
-  cmd->callback([o, &exit_code]() {
-    try {
-      exit_code = run(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack bench train-step: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 
 }  // namespace occtrack::app

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "../cli_support.hpp"
 #include "../commands.hpp"
 #include "allocation.hpp"
 #include "learning/dataset.hpp"
@@ -108,12 +109,7 @@ int run(TrainOptions o) {
     std::fflush(stderr);
   });
 
-  std::string created_by = "occtrack";
-#ifdef OCCTRACK_VERSION
-  created_by += " " OCCTRACK_VERSION;
-#endif
-  created_by += ": " + canonical_command(o);
-  learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by));
+  learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by(canonical_command(o))));
   std::printf("trained %s for %lld steps in %s: final %s\n", learning::to_string(o.settings.variant),
               static_cast<long long>(summary.steps), duration_text(summary.seconds).c_str(),
               loss_text(summary.final_loss).c_str());
@@ -125,18 +121,15 @@ int run(TrainOptions o) {
 }  // namespace
 
 void add_train_command(CLI::App& app, int& exit_code) {
-  auto o = std::make_shared<TrainOptions>();
+  auto [cmd, o] = add_command<TrainOptions>(app, "train", "Train the learned policy end to end through the projection");
   auto& s = o->settings;
-  CLI::App* cmd = app.add_subcommand("train", "Train the learned policy end to end through the projection");
   cmd->add_option("--data", o->data, "Dataset file (occtrack.dataset.v1); repeat for several")->required();
   cmd->add_option("--out", o->out, "Model file to write (occtrack.model.v1 safetensors)")->required();
-  cmd->add_option("--variant", o->variant, "cvae, bc (no projection) or fixed-q (nominal q)")
-      ->check(CLI::IsMember({"cvae", "bc", "fixed-q"}))
-      ->capture_default_str();
-  cmd->add_option("--steps", s.steps, "Optimisation steps in all (a resumed run continues up to this)")
-      ->check(CLI::Range(int64_t{0}, int64_t{1} << 40))
-      ->capture_default_str();
-  cmd->add_option("--batch", s.batch, "Rows per mini-batch")->check(CLI::Range(int64_t{1}, int64_t{1} << 24))->capture_default_str();
+  add_choice_option(cmd, "--variant", o->variant, "cvae, bc (no projection) or fixed-q (nominal q)",
+                    {"cvae", "bc", "fixed-q"});
+  add_bounded_option(cmd, "--steps", s.steps, "Optimisation steps in all (a resumed run continues up to this)",
+                     int64_t{0}, int64_t{1} << 40);
+  add_bounded_option(cmd, "--batch", s.batch, "Rows per mini-batch", int64_t{1}, int64_t{1} << 24);
   cmd->add_option("--lr", s.learning_rate, "Adam learning rate")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--lr-final", s.learning_rate_final,
                   "Learning rate at the last step, reached by cosine decay from --lr (default: constant --lr)")
@@ -150,15 +143,11 @@ void add_train_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--kl-warmup", s.kl_warmup_steps, "Steps over which the KL weight ramps up to beta")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--iterations", s.iterations, "K, unrolled projection iterations in training")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--iterations", s.iterations, "K, unrolled projection iterations in training", 1, 100000);
   cmd->add_flag("--plain-projection", s.plain_projection,
                 "Differentiate through the plain torch loop (autograd) instead of the hand-written backward");
   cmd->add_option("--device", s.device, "cpu, cuda or cuda:I")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "CPU threads for torch (0: torch's default)")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--threads", o->threads, "CPU threads for torch (0: torch's default)", 0, 1024);
   cmd->add_option("--seed", s.seed, "Seed of the weights, batches, latent noise and dropout")->capture_default_str();
   cmd->add_option("--checkpoint", s.checkpoint_path, "Checkpoint file (model and optimizer), written periodically");
   cmd->add_option("--checkpoint-every", s.checkpoint_every, "Steps between checkpoints")
@@ -167,35 +156,26 @@ void add_train_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--resume", o->resume,
                   "Continue from this checkpoint (same data, variant, sizes, batch, seed and K); new checkpoints "
                   "go to --checkpoint, or to this file");
-  cmd->add_option("--hidden", s.network.hidden, "H, encoder and decoder width")->check(CLI::Range(1, 1 << 16))->capture_default_str();
-  cmd->add_option("--layers", s.network.layers, "L, hidden layers of encoder and decoder")->check(CLI::Range(1, 64))->capture_default_str();
-  cmd->add_option("--features", s.network.features, "F, PointNet output features")->check(CLI::Range(1, 1 << 16))->capture_default_str();
-  cmd->add_option("--pointnet-hidden", s.network.pointnet_hidden, "H_p, PointNet fully connected width")
-      ->check(CLI::Range(1, 1 << 16))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--hidden", s.network.hidden, "H, encoder and decoder width", 1, 1 << 16);
+  add_bounded_option(cmd, "--layers", s.network.layers, "L, hidden layers of encoder and decoder", 1, 64);
+  add_bounded_option(cmd, "--features", s.network.features, "F, PointNet output features", 1, 1 << 16);
+  add_bounded_option(cmd, "--pointnet-hidden", s.network.pointnet_hidden, "H_p, PointNet fully connected width",
+                     1, 1 << 16);
   cmd->add_option("--pointnet-widths", s.network.pointnet_widths, "PointNet per-point widths (the last is E)")
       ->delimiter(',')
       ->check(CLI::Range(1, 1 << 16))
       ->capture_default_str();
-  cmd->add_option("--latent", s.network.latent, "Z, latent size")->check(CLI::Range(1, 1024))->capture_default_str();
-  cmd->add_option("--dropout", s.network.dropout, "PointNet dropout probability")->check(CLI::Range(0.0, 0.99))->capture_default_str();
-  cmd->add_option("--validation-share", s.validation_share, "Share of the episodes held out for validation")
-      ->check(CLI::Range(0.0, 0.9))
-      ->capture_default_str();
+  add_bounded_option(cmd, "--latent", s.network.latent, "Z, latent size", 1, 1024);
+  add_bounded_option(cmd, "--dropout", s.network.dropout, "PointNet dropout probability", 0.0, 0.99);
+  add_bounded_option(cmd, "--validation-share", s.validation_share, "Share of the episodes held out for validation",
+                     0.0, 0.9);
   cmd->add_option("--validation-every", s.validation_every, "Steps between validation losses (0: at the end only)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--progress-seconds", s.progress_seconds, "Seconds between progress lines")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->callback([o, &exit_code]() {
-    try {
-      exit_code = run(*o);
-    } catch (const std::exception& e) {
-      std::cerr << "occtrack train: " << e.what() << "\n";
-      exit_code = kExitInputError;
-    }
-  });
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 
 }  // namespace occtrack::app
