@@ -343,10 +343,9 @@ TEST(PolicyModel, NetworkConfigJsonRoundTripsAndValidates) {
   EXPECT_EQ(y.distance_max, 130);
   EXPECT_EQ(y.xi_bar, 230);
   EXPECT_EQ(y.size, 252);
+  // The projection metadata reads back as written (obstacles = the network's nearest points).
   const projection::Settings p = small_projection();
-  projection::Settings q = policy::parse_projection_json(policy::projection_json(p), "x");
-  q.obstacles = p.obstacles;
-  EXPECT_EQ(q, p);
+  EXPECT_EQ(io::validate_model_file(policy::random_model(small_network(), p, "cvae", 1)).projection, p);
 }
 
 TEST(PolicyModel, FoldedInferenceMatchesANaivePerSampleLoop) {

@@ -18,6 +18,7 @@
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
+#include "occtrack/io/dataset_file.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/sim/demonstrations.hpp"
 
@@ -150,7 +151,7 @@ int generate(const GenerateOptions& o) {
       detail += ", ETA " + duration_text(p.elapsed_s * (1.0 - p.fraction) / p.fraction);
     progress.update(p.fraction, detail);
   });
-  sim::write_demonstrations(o.out, data);
+  io::write_dataset_file(o.out, data);
 
   for (const std::string& failure : report.failures) std::fprintf(stderr, "skipped episode %s\n", failure.c_str());
   const double rate = report.seconds > 0 ? static_cast<double>(report.rows) / report.seconds : 0.0;
@@ -199,18 +200,18 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
 
 int info(const std::string& path) {
   const io::TensorFile file = io::read_safetensors(path);
-  const sim::Demonstrations data = sim::from_tensor_file(file);  // validates format and shapes
+  const io::DatasetFile data = io::validate_dataset_file(file);  // validates format and shapes
   std::printf("%s: %lld rows\n", path.c_str(), static_cast<long long>(data.rows));
   std::printf("metadata:\n");
   for (const auto& [key, value] : file.metadata) std::printf("  %-11s %s\n", key.c_str(), value.c_str());
   std::printf("tensors:\n");
   for (const auto& [name, tensor] : file.tensors)
     std::printf("  %-12s %s %s\n", name.c_str(), io::dtype_name(tensor.dtype), tensor.shape_text().c_str());
-  const sim::DemonstrationStatistics st = sim::demonstration_statistics(data);
+  const io::DatasetStatistics st = io::dataset_statistics(data);
   std::printf("statistics (%d episodes):\n", st.episodes);
-  static const char* const columns[sim::kObservationSize] = {"robot vx", "robot vy", "target x", "target y",
-                                                             "target vx", "target vy"};
-  for (int j = 0; j < sim::kObservationSize; ++j)
+  static const char* const columns[io::kObservationSize] = {"robot vx", "robot vy", "target x", "target y",
+                                                            "target vx", "target vy"};
+  for (int j = 0; j < io::kObservationSize; ++j)
     std::printf("  observation %-9s mean %7.3f  std %6.3f\n", columns[j], st.observation_mean(j),
                 st.observation_std(j));
   std::printf("  target distance        mean %7.3f m\n", st.target_distance_mean);
@@ -223,12 +224,12 @@ int info(const std::string& path) {
 }
 
 int merge(const std::string& out, const std::vector<std::string>& inputs) {
-  sim::Demonstrations merged;
+  io::DatasetFile merged;
   nlohmann::json sources = nlohmann::json::array();
   for (const std::string& path : inputs) {
-    const sim::Demonstrations part = sim::read_demonstrations(path);
+    const io::DatasetFile part = io::read_dataset_file(path);
     try {
-      sim::append_demonstrations(merged, part);
+      io::append_dataset(merged, part);
     } catch (const std::invalid_argument& e) {
       std::cerr << "occtrack dataset merge: " << path << ": " << e.what() << "\n";
       return kExitInputError;
@@ -241,7 +242,7 @@ int merge(const std::string& out, const std::vector<std::string>& inputs) {
                        {"driver", driver == part.metadata.end() ? "" : driver->second}});
   }
   merged.metadata["merged_from"] = sources.dump();
-  sim::write_demonstrations(out, merged);
+  io::write_dataset_file(out, merged);
   std::printf("wrote %s: %lld rows from %zu files\n", out.c_str(), static_cast<long long>(merged.rows),
               inputs.size());
   return kExitOk;

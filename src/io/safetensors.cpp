@@ -59,12 +59,6 @@ std::int64_t product(const std::vector<std::int64_t>& shape) {
   return n;
 }
 
-std::string shape_string(const std::vector<std::int64_t>& shape) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
 template <typename T>
 void put_values(TensorFile& file, const std::string& name, DType dtype, const std::vector<std::int64_t>& shape,
                 const std::vector<T>& values) {
@@ -72,7 +66,7 @@ void put_values(TensorFile& file, const std::string& name, DType dtype, const st
     if (d < 0) throw std::invalid_argument("safetensors: tensor '" + name + "' has a negative dimension");
   if (static_cast<std::int64_t>(values.size()) != product(shape))
     throw std::invalid_argument("safetensors: tensor '" + name + "' has " + std::to_string(values.size()) +
-                                " values for shape " + shape_string(shape));
+                                " values for shape " + shape_text(shape));
   file.put_raw(name, dtype, shape, values.data());
 }
 
@@ -93,7 +87,13 @@ std::size_t dtype_size(DType dtype) { return dtype == DType::F32 || dtype == DTy
 std::int64_t Tensor::numel() const { return product(shape); }
 std::vector<float> Tensor::as_float() const { return convert<float>(*this); }
 std::vector<double> Tensor::as_double() const { return convert<double>(*this); }
-std::string Tensor::shape_text() const { return shape_string(shape); }
+std::string shape_text(const std::vector<std::int64_t>& shape) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+std::string Tensor::shape_text() const { return io::shape_text(shape); }
 
 const Tensor& TensorFile::at(const std::string& name) const {
   auto it = tensors.find(name);
@@ -105,7 +105,7 @@ const Tensor& TensorFile::at(const std::string& name, const std::vector<std::int
   const Tensor& t = at(name);
   if (t.shape != shape)
     fail(source.empty() ? "safetensors" : source,
-         "tensor '" + name + "' has shape " + t.shape_text() + ", expected " + shape_string(shape));
+         "tensor '" + name + "' has shape " + t.shape_text() + ", expected " + shape_text(shape));
   return t;
 }
 

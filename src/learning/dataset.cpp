@@ -2,36 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <random>
 #include <stdexcept>
 
 #include "occtrack/io/error.hpp"
-#include "occtrack/io/projection_case.hpp"
-#include "occtrack/io/safetensors.hpp"
 
 namespace occtrack::learning {
 
 using torch::indexing::Slice;
-
-// ---------------------------------------------------------------------------------------------------------
-// projection metadata
-
-projection::Settings parse_projection_json(const std::string& text) {
-  projection::Settings s;
-  try {
-    s = io::parse_projection_settings(text, "metadata", "projection", /*strict=*/false);
-  } catch (const io::InputError& e) {
-    throw std::invalid_argument(e.what());
-  }
-  std::string error;
-  if (!s.validate(&error)) throw std::invalid_argument(error);
-  return s;
-}
-
-std::string projection_json(const projection::Settings& s) { return io::projection_settings_json(s); }
 
 // ---------------------------------------------------------------------------------------------------------
 // loading
@@ -40,123 +19,59 @@ namespace {
 
 [[noreturn]] void fail(const std::string& source, const std::string& what) { throw io::InputError(source + ": " + what); }
 
-std::string shape_text(const std::vector<int64_t>& shape) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
-// The tensor `name` as a CPU tensor of `dtype` with `rank` dimensions; float32/float64 or int32/int64 only.
-torch::Tensor to_torch(const io::TensorFile& file, const std::string& name, bool integer, std::size_t rank) {
-  const io::Tensor& t = file.at(name);  // throws "SOURCE: tensor 'NAME' is missing"
-  const bool is_integer = t.dtype == io::DType::I32 || t.dtype == io::DType::I64;
-  if (is_integer != integer)
-    fail(file.source, "tensor '" + name + "' has dtype " + io::dtype_name(t.dtype) + ", expected " +
-                          (integer ? "I32 or I64" : "F32 or F64"));
-  if (t.shape.size() != rank)
-    fail(file.source, "tensor '" + name + "' has shape " + t.shape_text() + ", expected " + std::to_string(rank) +
-                          " dimension(s)");
-  const torch::Dtype source_dtype = t.dtype == io::DType::F32   ? torch::kFloat32
-                                    : t.dtype == io::DType::F64 ? torch::kFloat64
-                                    : t.dtype == io::DType::I32 ? torch::kInt32
-                                                                : torch::kInt64;
-  torch::Tensor out = torch::empty(t.shape, source_dtype);
-  if (t.bytes.size() != static_cast<std::size_t>(out.numel()) * out.element_size())
-    fail(file.source, "tensor '" + name + "' holds " + std::to_string(t.bytes.size()) + " bytes, its shape needs " +
-                          std::to_string(out.numel() * out.element_size()));
-  if (!t.bytes.empty()) std::memcpy(out.data_ptr(), t.bytes.data(), t.bytes.size());
-  out = out.to(integer ? torch::kInt64 : torch::kFloat32);
-  if (!integer && !torch::isfinite(out).all().item<bool>()) {
-    const int64_t bad = (~torch::isfinite(out.reshape({out.size(0), -1}))).any(1).nonzero()[0].item<int64_t>();
-    fail(file.source, "tensor '" + name + "' has a non-finite value in row " + std::to_string(bad));
-  }
-  return out;
-}
-
-void expect_shape(const io::TensorFile& file, const std::string& name, const torch::Tensor& t,
-                  const std::vector<int64_t>& shape) {
-  if (t.sizes().vec() != shape)
-    fail(file.source, "tensor '" + name + "' has shape " + shape_text(t.sizes().vec()) + ", expected " +
-                          shape_text(shape));
-}
-
-struct LoadedFile {
-  DatasetFile info;
-  projection::Settings projection;
-  torch::Tensor observation, cloud, obstacles, expert_xi, expert_cost, episode, time;
-};
-
-LoadedFile load_one(const std::string& path) {
-  const io::TensorFile file = io::read_safetensors(path);
-  const std::string& format = file.meta("format");
-  if (format != kDatasetFormat)
-    fail(path, "metadata 'format' is '" + format + "', expected '" + kDatasetFormat + "'");
-  LoadedFile f;
-  f.info.path = path;
-  f.info.metadata = file.metadata;
-  try {
-    f.projection = parse_projection_json(file.meta("projection"));
-  } catch (const std::invalid_argument& e) {
-    fail(path, std::string("metadata 'projection': ") + e.what());
-  }
-  const int64_t n2 = 2 * f.projection.coefficients();
-
-  f.observation = to_torch(file, "observation", false, 2);
-  const int64_t S = f.observation.size(0);
-  expect_shape(file, "observation", f.observation, {S, 6});
-  f.cloud = to_torch(file, "cloud", false, 3);
-  expect_shape(file, "cloud", f.cloud, {S, f.cloud.size(1), 2});
-  f.obstacles = to_torch(file, "obstacles", false, 3);
-  expect_shape(file, "obstacles", f.obstacles, {S, f.obstacles.size(1), 4});
-  f.expert_xi = to_torch(file, "expert_xi", false, 2);
-  expect_shape(file, "expert_xi", f.expert_xi, {S, n2});
-  f.expert_cost = to_torch(file, "expert_cost", false, 1);
-  expect_shape(file, "expert_cost", f.expert_cost, {S});
-  f.episode = to_torch(file, "episode", true, 1);
-  expect_shape(file, "episode", f.episode, {S});
-  f.time = to_torch(file, "time", false, 1);
-  expect_shape(file, "time", f.time, {S});
-  if (S == 0) fail(path, "the dataset has no rows");
-  if (f.cloud.size(1) == 0) fail(path, "tensor 'cloud' has no points");
-  if (f.episode.min().item<int64_t>() < 0) fail(path, "tensor 'episode' has a negative index");
-  f.info.rows = S;
-  f.info.episodes = std::get<0>(torch::_unique(f.episode)).numel();
-  return f;
+// A checked column as a CPU tensor of its own shape (copied: the file's vectors are not kept).
+template <typename T>
+torch::Tensor column(const std::vector<T>& values, std::vector<int64_t> shape, torch::Dtype dtype) {
+  return torch::from_blob(const_cast<T*>(values.data()), shape, dtype).clone();
 }
 
 }  // namespace
 
 Dataset load_dataset(const std::vector<std::string>& paths) {
   if (paths.empty()) throw io::InputError("no dataset file given");
-  std::vector<LoadedFile> files;
-  for (const auto& path : paths) files.push_back(load_one(path));
-  const LoadedFile& first = files.front();
-  for (const auto& f : files) {
-    if (f.projection.degree != first.projection.degree || f.projection.steps != first.projection.steps ||
-        f.projection.horizon != first.projection.horizon || f.projection.via_step_1 != first.projection.via_step_1 ||
-        f.projection.via_step_2 != first.projection.via_step_2)
-      fail(f.info.path, "metadata 'projection' (degree, steps, horizon, via_steps) differs from " + first.info.path);
-    if (f.cloud.size(1) != first.cloud.size(1))
-      fail(f.info.path, "tensor 'cloud' has " + std::to_string(f.cloud.size(1)) + " points per row, " +
-                            first.info.path + " has " + std::to_string(first.cloud.size(1)));
-    if (f.obstacles.size(1) != first.obstacles.size(1))
-      fail(f.info.path, "tensor 'obstacles' has " + std::to_string(f.obstacles.size(1)) + " points per row, " +
-                            first.info.path + " has " + std::to_string(first.obstacles.size(1)));
+  std::vector<io::DatasetFile> files;
+  for (const auto& path : paths) files.push_back(io::read_dataset_file(path));
+  return make_dataset(files);
+}
+
+Dataset make_dataset(const std::vector<io::DatasetFile>& files) {
+  if (files.empty()) throw io::InputError("no dataset file given");
+  std::vector<projection::Settings> projections;
+  for (const io::DatasetFile& f : files) {
+    projections.push_back(io::dataset_projection(f));
+    if (f.rows == 0) fail(f.source, "the dataset has no rows");
+  }
+  const io::DatasetFile& first = files.front();
+  const projection::Settings& p0 = projections.front();
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    const io::DatasetFile& f = files[k];
+    const projection::Settings& p = projections[k];
+    if (p.degree != p0.degree || p.steps != p0.steps || p.horizon != p0.horizon || p.via_step_1 != p0.via_step_1 ||
+        p.via_step_2 != p0.via_step_2)
+      fail(f.source, "metadata 'projection' (degree, steps, horizon, via_steps) differs from " + first.source);
+    if (f.cloud_points != first.cloud_points)
+      fail(f.source, "tensor 'cloud' has " + std::to_string(f.cloud_points) + " points per row, " + first.source +
+                         " has " + std::to_string(first.cloud_points));
+    if (f.nearest_points != first.nearest_points)
+      fail(f.source, "tensor 'obstacles' has " + std::to_string(f.nearest_points) + " points per row, " +
+                         first.source + " has " + std::to_string(first.nearest_points));
   }
   Dataset d;
-  d.projection = first.projection;
+  d.projection = p0;
   std::vector<torch::Tensor> obs, cloud, obstacles, xi, cost, episode, time;
   int64_t episode_offset = 0;
-  for (auto& f : files) {
-    obs.push_back(f.observation);
-    cloud.push_back(f.cloud);
-    obstacles.push_back(f.obstacles);
-    xi.push_back(f.expert_xi);
-    cost.push_back(f.expert_cost);
-    time.push_back(f.time);
-    episode.push_back(f.episode + episode_offset);
-    episode_offset += f.episode.max().item<int64_t>() + 1;
-    d.files.push_back(std::move(f.info));
+  for (const io::DatasetFile& f : files) {
+    const int64_t S = f.rows, C = f.cloud_points, N = f.nearest_points, n2 = 2 * f.coefficients;
+    obs.push_back(column(f.observation, {S, io::kObservationSize}, torch::kFloat32));
+    cloud.push_back(column(f.cloud, {S, C, 2}, torch::kFloat32));
+    obstacles.push_back(column(f.obstacles, {S, N, 4}, torch::kFloat32));
+    xi.push_back(column(f.expert_xi, {S, n2}, torch::kFloat32));
+    cost.push_back(column(f.expert_cost, {S}, torch::kFloat32));
+    time.push_back(column(f.time, {S}, torch::kFloat32));
+    const torch::Tensor e = column(f.episode, {S}, torch::kInt32).to(torch::kInt64);
+    episode.push_back(e + episode_offset);
+    episode_offset += e.max().item<int64_t>() + 1;
+    d.files.push_back({f.source, S, std::get<0>(torch::_unique(e)).numel(), f.metadata});
   }
   d.observation = torch::cat(obs);
   d.cloud = torch::cat(cloud);
@@ -201,7 +116,7 @@ DatasetSplit split_by_episode(const Dataset& data, double validation_share, std:
   return split;
 }
 
-NormalizationStats compute_normalization(const Dataset& data, const torch::Tensor& rows, const NetworkConfig& config,
+NormalizationStats compute_normalization(const Dataset& data, const torch::Tensor& rows, const io::NetworkConfig& config,
                                          const core::TrackingBand& band, double std_floor) {
   if (rows.numel() == 0) throw std::invalid_argument("normalisation: no training rows");
   torch::NoGradGuard no_grad;
@@ -227,7 +142,7 @@ NormalizationStats compute_normalization(const Dataset& data, const torch::Tenso
   const torch::Tensor via = torch::cat({at(basis.P[data.projection.via_step_1]), at(basis.P[data.projection.via_step_2])}, 1);
   const auto [terminal_mean, terminal_std] = stats(terminal);
   const auto [via_mean, via_std] = stats(via);
-  const OutputLayout l(config);
+  const io::OutputLayout l(config);
   torch::Tensor offset = torch::zeros({l.size}, f64), scale = torch::ones({l.size}, f64);
   offset.index_put_({Slice(l.terminal, l.terminal + 4)}, terminal_mean);
   scale.index_put_({Slice(l.terminal, l.terminal + 4)}, terminal_std);
@@ -341,7 +256,7 @@ Dataset synthetic_dataset(const SyntheticDatasetOptions& o, const projection::Se
       xi[r][n + i] = float(s * fy * keep);
     }
   }
-  DatasetFile file;
+  DatasetSource file;
   file.path = "synthetic";
   file.rows = o.rows;
   file.episodes = std::min(o.episodes, (o.rows + per_episode - 1) / per_episode);

@@ -1,6 +1,6 @@
-// Training data (docs/learning.md, "Dataset file"): one or more safetensors files of format
-// "occtrack.dataset.v1", loaded into CPU float32 tensors, with the normalisation statistics, a held-out
-// validation split by episode, and seeded mini-batches.
+// Training data: one or more dataset files (io/dataset_file.hpp, the contract, which reads and checks them)
+// as CPU float32 tensors, with the normalisation statistics, a held-out validation split by episode, and
+// seeded mini-batches.
 //
 //   learning::Dataset data = learning::load_dataset({"a.safetensors", "b.safetensors"});  // io::InputError
 //   learning::DatasetSplit split = learning::split_by_episode(data, 0.1, seed);
@@ -17,11 +17,10 @@
 
 #include "learning/networks.hpp"
 #include "occtrack/core/tracking.hpp"
+#include "occtrack/io/dataset_file.hpp"
 #include "occtrack/projection/settings.hpp"
 
 namespace occtrack::learning {
-
-inline constexpr const char* kDatasetFormat = "occtrack.dataset.v1";
 
 /// One mini-batch, on the training device.
 struct Batch {
@@ -32,7 +31,8 @@ struct Batch {
   int64_t size() const { return observation.size(0); }
 };
 
-struct DatasetFile {
+/// One file of a Dataset.
+struct DatasetSource {
   std::string path;
   int64_t rows = 0;
   int64_t episodes = 0;
@@ -42,7 +42,7 @@ struct DatasetFile {
 /// Every file's rows, concatenated in file order. Float tensors are float32 on the CPU; `episode` is int64
 /// and globally unique (file k's episodes are offset by the episodes of files 0..k-1).
 struct Dataset {
-  std::vector<DatasetFile> files;
+  std::vector<DatasetSource> files;
   projection::Settings projection;  ///< from the first file's `projection` metadata (all files must agree)
   torch::Tensor observation;        ///< [S, 6]
   torch::Tensor cloud;              ///< [S, C, 2]
@@ -63,18 +63,12 @@ struct Dataset {
   void to(torch::Device device);
 };
 
-/// Loads and checks every file: format tag, each tensor present with its dtype (float32 or float64; episode
-/// int32 or int64) and a shape consistent with the others and with the `projection` metadata (2n
-/// coefficients), finite values; all files with the same sizes and projection settings. Throws
-/// io::InputError naming the file and the tensor or metadata key.
+/// Reads and checks every file with io::read_dataset_file, then concatenates them: at least one row, and all
+/// files with the same cloud and obstacle points and projection geometry (degree, steps, horizon, via steps).
+/// Throws io::InputError naming the file and the tensor or metadata key.
 Dataset load_dataset(const std::vector<std::string>& paths);
-
-/// projection::Settings from the `projection` metadata JSON (io::parse_projection_settings, not strict:
-/// iterations and rho optional, other keys ignored), validated; throws std::invalid_argument naming a
-/// missing or malformed field.
-projection::Settings parse_projection_json(const std::string& text);
-/// The same fields as JSON text.
-std::string projection_json(const projection::Settings& settings);
+/// The same from checked files already in memory (each file's `source` names it).
+Dataset make_dataset(const std::vector<io::DatasetFile>& files);
 
 /// Row indices (int64, CPU) of the training and the validation rows. Whole episodes go to validation,
 /// chosen at random (seeded) until at least `validation_share` of the episodes are held out; none when the
@@ -91,7 +85,7 @@ DatasetSplit split_by_episode(const Dataset& data, double validation_share, std:
 /// - output offset and scale: terminal state and via points from the expert trajectories' statistics
 ///   (W expert_xi at the last step and at the via steps), lambda0 offset 0 and scale 1, d_min offset
 ///   band.min and d_max offset band.max with scale (band.max - band.min) / 4, xi_bar as xi.
-NormalizationStats compute_normalization(const Dataset& data, const torch::Tensor& rows, const NetworkConfig& config,
+NormalizationStats compute_normalization(const Dataset& data, const torch::Tensor& rows, const io::NetworkConfig& config,
                                          const core::TrackingBand& band, double std_floor = 1e-3);
 
 /// Mini-batches of `batch` rows drawn without replacement from `rows`, reshuffled every epoch. The batch of

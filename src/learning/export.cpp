@@ -2,8 +2,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "learning/dataset.hpp"
-
 namespace occtrack::learning {
 
 namespace {
@@ -44,31 +42,26 @@ std::string training_json(const TrainingRecord& r) {
   return j.dump();
 }
 
-std::string band_json(const core::TrackingBand& band) {
-  return nlohmann::json{{"min", band.min}, {"reference", band.reference}, {"max", band.max}}.dump();
-}
-
-io::TensorFile model_file(CvaeImpl& model, const ModelMetadata& m) {
-  io::TensorFile file;
-  file.metadata["format"] = kModelFormat;
-  file.metadata["variant"] = to_string(m.variant);
-  file.metadata["network"] = network_json(m.network);
-  nlohmann::json projection = nlohmann::json::parse(projection_json(m.projection));
-  projection["training_iterations"] = m.projection.iterations;
-  file.metadata["projection"] = projection.dump();
-  file.metadata["band"] = band_json(m.band);
+io::ModelFile model_file(CvaeImpl& model, const ModelMetadata& m) {
+  io::ModelFile file;
+  file.variant = m.variant;
+  file.network = m.network;
+  file.projection = m.projection;
+  file.band = m.band;
   file.metadata["training"] = training_json(m.training);
   file.metadata["created_by"] = m.created_by;
+  io::TensorFile tensors;
   torch::NoGradGuard no_grad;
   for (const auto& [name, tensor] : named_model_tensors(model)) {
     const torch::Tensor t = tensor.detach().to(torch::kCPU, torch::kFloat32).contiguous();
-    file.put_raw(name, io::DType::F32, t.sizes().vec(), t.data_ptr<float>());
+    tensors.put_raw(name, io::DType::F32, t.sizes().vec(), t.data_ptr<float>());
   }
+  file.tensors = std::move(tensors.tensors);
   return file;
 }
 
 void export_model(const std::string& path, CvaeImpl& model, const ModelMetadata& metadata) {
-  io::write_safetensors(path, model_file(model, metadata));
+  io::write_model_file(path, model_file(model, metadata));
 }
 
 }  // namespace occtrack::learning

@@ -1,6 +1,6 @@
-// The model file (docs/learning.md, "Model file"): safetensors, format "occtrack.model.v1", every tensor of
-// the model in float32 on the CPU under its docs/learning.md name, and the metadata the run-time policy
-// checks (variant, network, projection, band) plus the training's provenance.
+// The export of a trained model as a model file (io/model_file.hpp, the contract): every tensor of the
+// model in float32 on the CPU under its docs/learning.md name, the metadata the run-time policy checks
+// (variant, network, projection, band) and the training's provenance (`training`, `created_by`).
 //
 //   learning::export_model("model.safetensors", trainer.model(), trainer.model_metadata(summary, created_by));
 #pragma once
@@ -13,12 +13,10 @@
 #include "learning/networks.hpp"
 #include "learning/trainer.hpp"
 #include "occtrack/core/tracking.hpp"
-#include "occtrack/io/safetensors.hpp"
+#include "occtrack/io/model_file.hpp"
 #include "occtrack/projection/settings.hpp"
 
 namespace occtrack::learning {
-
-inline constexpr const char* kModelFormat = "occtrack.model.v1";
 
 /// Where a model came from (the `training` metadata JSON).
 struct TrainingRecord {
@@ -40,8 +38,8 @@ struct TrainingRecord {
 };
 
 struct ModelMetadata {
-  Variant variant = Variant::cvae;
-  NetworkConfig network;
+  io::Variant variant = io::Variant::cvae;
+  io::NetworkConfig network;
   projection::Settings projection;  ///< iterations = the training iteration count
   core::TrackingBand band;
   TrainingRecord training;
@@ -50,13 +48,11 @@ struct ModelMetadata {
 
 /// The `training` metadata as JSON text.
 std::string training_json(const TrainingRecord& record);
-/// The `band` metadata as JSON text: {"min", "reference", "max"}.
-std::string band_json(const core::TrackingBand& band);
 
-/// The file's contents: metadata (format, variant, network, projection, band, training, created_by) and
-/// every tensor of named_model_tensors() as float32.
-io::TensorFile model_file(CvaeImpl& model, const ModelMetadata& metadata);
-/// Writes model_file() to `path` (io::InputError when it cannot be written).
+/// The file's contents: variant, network, projection, band, metadata `training` and `created_by`, and every
+/// tensor of named_model_tensors() as float32 (io::to_tensor_file adds the format).
+io::ModelFile model_file(CvaeImpl& model, const ModelMetadata& metadata);
+/// Writes model_file() with io::write_model_file (io::InputError when it cannot be written).
 void export_model(const std::string& path, CvaeImpl& model, const ModelMetadata& metadata);
 
 }  // namespace occtrack::learning

@@ -1,6 +1,5 @@
 #include "learning/networks.hpp"
 
-#include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "occtrack/core/bernstein.hpp"
@@ -8,93 +7,8 @@
 namespace occtrack::learning {
 
 namespace nn = torch::nn;
+using io::NetworkConfig;
 using torch::indexing::Slice;
-
-bool NetworkConfig::validate(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    if (error) *error = message;
-    return false;
-  };
-  auto positive = [&](int value, const char* name) {
-    return value > 0 ? true : fail(std::string(name) + " (" + std::to_string(value) + ") must be positive");
-  };
-  if (!positive(observation, "observation") || !positive(cloud_points, "cloud_points") ||
-      !positive(latent, "latent") || !positive(pointnet_hidden, "pointnet_hidden") ||
-      !positive(features, "features") || !positive(hidden, "hidden") || !positive(layers, "layers") ||
-      !positive(coefficients, "coefficients") || !positive(steps, "steps"))
-    return false;
-  if (nearest_points < 0) return fail("nearest_points (" + std::to_string(nearest_points) + ") must not be negative");
-  if (pointnet_widths.empty()) return fail("pointnet_widths must not be empty");
-  for (std::size_t i = 0; i < pointnet_widths.size(); ++i)
-    if (pointnet_widths[i] <= 0) return fail("pointnet_widths[" + std::to_string(i) + "] must be positive");
-  if (!(batch_norm_eps > 0)) return fail("batch_norm_eps must be positive");
-  if (!(dropout >= 0 && dropout < 1)) return fail("dropout (" + std::to_string(dropout) + ") must be in [0, 1)");
-  return true;
-}
-
-std::string network_json(const NetworkConfig& c) {
-  const nlohmann::json j = {{"observation", c.observation},
-                            {"cloud_points", c.cloud_points},
-                            {"nearest_points", c.nearest_points},
-                            {"latent", c.latent},
-                            {"pointnet_widths", c.pointnet_widths},
-                            {"pointnet_hidden", c.pointnet_hidden},
-                            {"features", c.features},
-                            {"hidden", c.hidden},
-                            {"layers", c.layers},
-                            {"outputs", c.outputs()},
-                            {"coefficients", c.coefficients},
-                            {"steps", c.steps},
-                            {"batch_norm_eps", c.batch_norm_eps}};
-  return j.dump();
-}
-
-NetworkConfig parse_network_json(const std::string& text) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(std::string("network: not JSON: ") + e.what());
-  }
-  auto get = [&](const char* key) -> const nlohmann::json& {
-    if (!j.is_object() || !j.contains(key)) throw std::invalid_argument(std::string("network: '") + key + "' is missing");
-    return j.at(key);
-  };
-  NetworkConfig c;
-  try {
-    c.observation = get("observation").get<int>();
-    c.cloud_points = get("cloud_points").get<int>();
-    c.nearest_points = get("nearest_points").get<int>();
-    c.latent = get("latent").get<int>();
-    c.pointnet_widths = get("pointnet_widths").get<std::vector<int>>();
-    c.pointnet_hidden = get("pointnet_hidden").get<int>();
-    c.features = get("features").get<int>();
-    c.hidden = get("hidden").get<int>();
-    c.layers = get("layers").get<int>();
-    c.coefficients = get("coefficients").get<int>();
-    c.steps = get("steps").get<int>();
-    c.batch_norm_eps = get("batch_norm_eps").get<double>();
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(std::string("network: ") + e.what());
-  }
-  if (j.contains("outputs") && j.at("outputs").get<int>() != c.outputs())
-    throw std::invalid_argument("network: 'outputs' is " + j.at("outputs").dump() + ", the sizes give " +
-                                std::to_string(c.outputs()));
-  std::string error;
-  if (!c.validate(&error)) throw std::invalid_argument("network: " + error);
-  return c;
-}
-
-OutputLayout::OutputLayout(const NetworkConfig& c) {
-  const int n2 = 2 * c.coefficients;
-  terminal = 0;
-  via = 4;
-  lambda0 = 8;
-  distance_min = lambda0 + n2;
-  distance_max = distance_min + c.steps;
-  xi_bar = distance_max + c.steps;
-  size = xi_bar + n2;
-}
 
 // ---------------------------------------------------------------------------------------------------------
 
@@ -116,7 +30,7 @@ NormalizationImpl::NormalizationImpl(const NetworkConfig& c) {
   observation = register_module("observation", Standardizer(c.observation));
   cloud = register_module("cloud", Standardizer(2));
   xi = register_module("xi", Standardizer(2 * c.coefficients));
-  output = register_module("output", OutputScaling(c.outputs()));
+  output = register_module("output", OutputScaling(c.outputs));
 }
 
 namespace {
@@ -159,7 +73,7 @@ torch::Tensor per_point(nn::BatchNorm1d& bn, const torch::Tensor& x) {
 
 }  // namespace
 
-PointNetImpl::PointNetImpl(const NetworkConfig& c) {
+PointNetImpl::PointNetImpl(const NetworkConfig& c, double dropout) {
   int input = 2;
   for (std::size_t i = 0; i < c.pointnet_widths.size(); ++i) {
     const int width = c.pointnet_widths[i];
@@ -169,7 +83,7 @@ PointNetImpl::PointNetImpl(const NetworkConfig& c) {
   }
   fc0_ = register_module("fc0", nn::Linear(input, c.pointnet_hidden));
   fc_bn0_ = register_module("fc_bn0", batch_norm(c.pointnet_hidden, c));
-  dropout_ = register_module("dropout", nn::Dropout(c.dropout));
+  dropout_ = register_module("dropout", nn::Dropout(dropout));
   fc1_ = register_module("fc1", nn::Linear(c.pointnet_hidden, c.features));
 }
 
@@ -209,7 +123,7 @@ Posterior EncoderImpl::forward(const torch::Tensor& observation, const torch::Te
 }
 
 DecoderImpl::DecoderImpl(const NetworkConfig& c) : trunk_(*this, c.latent + c.observation + c.features, c) {
-  out_ = register_module("out", nn::Linear(c.hidden, c.outputs()));
+  out_ = register_module("out", nn::Linear(c.hidden, c.outputs));
   // Start near the output offsets (the training set's means): a small last layer.
   torch::NoGradGuard no_grad;
   out_->weight.mul_(0.1);
@@ -221,11 +135,13 @@ torch::Tensor DecoderImpl::forward(const torch::Tensor& z, const torch::Tensor& 
   return out_->forward(trunk_.forward(torch::cat({z, observation, features}, 1)));
 }
 
-CvaeImpl::CvaeImpl(const NetworkConfig& config) : config_(config) {
+CvaeImpl::CvaeImpl(const NetworkConfig& config, double dropout) : config_(config) {
   std::string error;
   if (!config.validate(&error)) throw std::invalid_argument("network: " + error);
+  if (!(dropout >= 0 && dropout < 1))
+    throw std::invalid_argument("network: dropout (" + std::to_string(dropout) + ") must be in [0, 1)");
   norm = register_module("norm", Normalization(config));
-  pointnet = register_module("pointnet", PointNet(config));
+  pointnet = register_module("pointnet", PointNet(config, dropout));
   encoder = register_module("encoder", Encoder(config));
   decoder = register_module("decoder", Decoder(config));
 }
@@ -265,7 +181,7 @@ std::vector<std::pair<std::string, torch::Tensor>> named_model_tensors(CvaeImpl&
 // ---------------------------------------------------------------------------------------------------------
 
 DecodedOutputs split_outputs(const torch::Tensor& y, const NetworkConfig& c) {
-  const OutputLayout l(c);
+  const io::OutputLayout l(c);
   if (y.dim() != 2 || y.size(1) != l.size)
     throw std::invalid_argument("decoder outputs must be [B, " + std::to_string(l.size) + "]");
   auto cols = [&](int begin, int end) { return y.index({Slice(), Slice(begin, end)}); };
@@ -316,7 +232,7 @@ ProjectionInputs policy_outputs(const torch::Tensor& outputs, const torch::Tenso
   in.via_points = d.via_points;
   in.lambda0 = d.lambda0;
   in.xi_bar = d.xi_bar;
-  if (settings.variant != Variant::fixed_q) {
+  if (settings.variant != io::Variant::fixed_q) {
     in.terminal = d.terminal;
     in.distance_min = d.distance_min;
     in.distance_max = d.distance_max;

@@ -6,8 +6,8 @@
 // named_buffers() (less batch norm's num_batches_tracked) give exactly "pointnet.conv0.weight", ...,
 // "norm.output.scale" of docs/learning.md, so that the export is a plain walk over them.
 //
-//   learning::NetworkConfig config;                 // defaults of docs/learning.md
-//   learning::Cvae model(config);
+//   io::NetworkConfig config;                       // defaults of docs/learning.md
+//   learning::Cvae model(config, /*dropout=*/0.3);
 //   model->set_normalization(stats);                // from learning::compute_normalization
 //   learning::CvaeForward f = model->forward(observation, cloud, expert_xi);  // training: z ~ q(z | ...)
 //   model->eval();                                                              // inference: z ~ N(0, I)
@@ -16,56 +16,18 @@
 
 #include <torch/torch.h>
 
-#include "occtrack/policy/model.hpp"
-
 #include <string>
 #include <vector>
 
 #include "learning/projection.hpp"
 #include "occtrack/core/tracking.hpp"
+#include "occtrack/io/model_file.hpp"
 #include "occtrack/projection/settings.hpp"
 
 namespace occtrack::learning {
 
-/// The three policies trained on the same data (shared/spec/policy.md, "Variants"): the run-time library's
-/// enum, with its spellings ("cvae", "bc", "fixed-q") and its parser (io::InputError on an unknown one).
-using Variant = policy::Variant;
-using policy::parse_variant;
-using policy::to_string;
-
-/// Network sizes (docs/learning.md, "Sizes"); every field is stored in the model file's `network` metadata.
-struct NetworkConfig {
-  int observation = 6;      ///< O: robot vx, vy; target x, y (relative); target vx, vy
-  int cloud_points = 200;   ///< C: points of the PointNet input
-  int nearest_points = 60;  ///< N: the optimizer's obstacle points
-  int latent = 2;           ///< Z
-  std::vector<int> pointnet_widths = {64, 64, 64, 128, 256};  ///< per-point layers; the last is E
-  int pointnet_hidden = 256;  ///< H_p
-  int features = 64;          ///< F
-  int hidden = 256;           ///< H: encoder and decoder width
-  int layers = 3;             ///< L: hidden layers of the encoder and of the decoder
-  int coefficients = 11;      ///< n: Bernstein coefficients per axis
-  int steps = 100;            ///< m: steps of the horizon
-  double batch_norm_eps = 1e-5;
-  double dropout = 0.3;       ///< PointNet's dropout probability (training only; not part of the file's network)
-
-  /// Y = 4 (terminal) + 4 (via) + 2n (lambda0) + m (d_min) + m (d_max) + 2n (xi_bar).
-  int outputs() const { return 8 + 4 * coefficients + 2 * steps; }
-  /// False, with *error naming the first broken field, when a size is not positive or dropout not in [0, 1).
-  bool validate(std::string* error = nullptr) const;
-  bool operator==(const NetworkConfig&) const = default;
-};
-
-/// The `network` metadata JSON of docs/learning.md (observation, cloud_points, ..., batch_norm_eps).
-std::string network_json(const NetworkConfig& config);
-/// Parses network_json's text; throws std::invalid_argument naming a missing or malformed field.
-NetworkConfig parse_network_json(const std::string& text);
-
-/// Column ranges of the decoder output (docs/learning.md: terminal, via, lambda0, d_min, d_max, xi_bar).
-struct OutputLayout {
-  int terminal = 0, via = 4, lambda0 = 8, distance_min = 0, distance_max = 0, xi_bar = 0, size = 0;
-  explicit OutputLayout(const NetworkConfig& config);
-};
+// The sizes, the output layout and the variants are the model file's (io/model_file.hpp): io::NetworkConfig,
+// io::OutputLayout, io::Variant. What only training uses (PointNet's dropout) is passed beside them.
 
 // ---------------------------------------------------------------------------------------------------------
 // Normalisation buffers ("norm.*"): statistics of the training set, stored in the model file.
@@ -98,7 +60,7 @@ struct NormalizationStats {
 
 class NormalizationImpl : public torch::nn::Module {
  public:
-  explicit NormalizationImpl(const NetworkConfig& config);
+  explicit NormalizationImpl(const io::NetworkConfig& config);
   /// Copies the statistics into the buffers (checks their sizes; std::invalid_argument otherwise).
   void set(const NormalizationStats& stats);
   Standardizer observation{nullptr}, cloud{nullptr}, xi{nullptr};
@@ -110,10 +72,10 @@ TORCH_MODULE(Normalization);
 // The networks (docs/learning.md, "Networks, in eval mode"). Inputs are already normalised.
 
 /// Per-point shared layers (1x1 convolutions as Linear over the last dimension) with batch norm over batch
-/// and points, max pool over points, then fc0, batch norm, ReLU, dropout and fc1 to F features.
+/// and points, max pool over points, then fc0, batch norm, ReLU, dropout (training only) and fc1 to F features.
 class PointNetImpl : public torch::nn::Module {
  public:
-  explicit PointNetImpl(const NetworkConfig& config);
+  PointNetImpl(const io::NetworkConfig& config, double dropout);
   /// cloud: [B, C, 2], normalised. Returns [B, F].
   torch::Tensor forward(const torch::Tensor& cloud);
   /// The per-point part alone, max-pooled: [B, E] (for tests against the Eigen policy).
@@ -132,7 +94,7 @@ TORCH_MODULE(PointNet);
 class MlpTrunk {
  public:
   MlpTrunk() = default;
-  MlpTrunk(torch::nn::Module& owner, int input, const NetworkConfig& config);
+  MlpTrunk(torch::nn::Module& owner, int input, const io::NetworkConfig& config);
   torch::Tensor forward(torch::Tensor x);
 
  private:
@@ -148,7 +110,7 @@ struct Posterior {
 /// q(z | observation, features, expert trajectory): input [obs_n, features, xi_n] (O + F + 2n).
 class EncoderImpl : public torch::nn::Module {
  public:
-  explicit EncoderImpl(const NetworkConfig& config);
+  explicit EncoderImpl(const io::NetworkConfig& config);
   Posterior forward(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& xi);
 
  private:
@@ -160,7 +122,7 @@ TORCH_MODULE(Encoder);
 /// p(outputs | z, observation, features): input [z, obs_n, features] (Z + O + F); returns raw [B, Y].
 class DecoderImpl : public torch::nn::Module {
  public:
-  explicit DecoderImpl(const NetworkConfig& config);
+  explicit DecoderImpl(const io::NetworkConfig& config);
   torch::Tensor forward(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& features);
 
  private:
@@ -177,7 +139,9 @@ struct CvaeForward {
 /// The whole model: normalisation buffers, PointNet, encoder and decoder. Raw (unnormalised) inputs.
 class CvaeImpl : public torch::nn::Module {
  public:
-  explicit CvaeImpl(const NetworkConfig& config);
+  /// Throws std::invalid_argument "network: FIELD ..." when config.validate() fails, or when dropout is not
+  /// in [0, 1).
+  CvaeImpl(const io::NetworkConfig& config, double dropout);
 
   void set_normalization(const NormalizationStats& stats) { norm->set(stats); }
 
@@ -190,7 +154,7 @@ class CvaeImpl : public torch::nn::Module {
   /// Training pass: z = mu + sigma * eps with eps ~ N(0, I) from torch's global generator.
   CvaeForward forward(const torch::Tensor& observation, const torch::Tensor& cloud, const torch::Tensor& expert_xi);
 
-  const NetworkConfig& config() const { return config_; }
+  const io::NetworkConfig& config() const { return config_; }
 
   Normalization norm{nullptr};
   PointNet pointnet{nullptr};
@@ -198,7 +162,7 @@ class CvaeImpl : public torch::nn::Module {
   Decoder decoder{nullptr};
 
  private:
-  NetworkConfig config_;
+  io::NetworkConfig config_;
 };
 TORCH_MODULE(Cvae);
 
@@ -219,7 +183,7 @@ struct DecodedOutputs {
   torch::Tensor xi_bar;        ///< [B, 2n]
 };
 
-DecodedOutputs split_outputs(const torch::Tensor& outputs, const NetworkConfig& config);
+DecodedOutputs split_outputs(const torch::Tensor& outputs, const io::NetworkConfig& config);
 /// Step 1: terminal velocities clamped to [-speed_max, speed_max] per axis; d_min floored at band_min.
 DecodedOutputs post_process(const DecodedOutputs& decoded, double speed_max, double band_min);
 
@@ -234,7 +198,7 @@ struct TrajectoryBasis {
 
 /// What the policy needs beyond the decoder outputs to build the projection's inputs.
 struct PolicySettings {
-  Variant variant = Variant::cvae;
+  io::Variant variant = io::Variant::cvae;
   projection::Settings projection;
   core::TrackingBand band;
 };
@@ -249,6 +213,6 @@ struct PolicySettings {
 /// - bc: as cvae (the caller skips the projection; the plan is xi_bar).
 ProjectionInputs policy_outputs(const torch::Tensor& outputs, const torch::Tensor& observation,
                                 const torch::Tensor& obstacles, const PolicySettings& settings,
-                                const TrajectoryBasis& basis, const NetworkConfig& config);
+                                const TrajectoryBasis& basis, const io::NetworkConfig& config);
 
 }  // namespace occtrack::learning

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "learning/export.hpp"
+#include "occtrack/io/projection_case.hpp"
 
 namespace occtrack::learning {
 
@@ -35,6 +36,7 @@ bool TrainingSettings::validate(std::string* error) const {
   if (!(band.min > 0 && band.min <= band.max)) return fail("band: need 0 < min <= max");
   std::string network_error;
   if (!network.validate(&network_error)) return fail("network: " + network_error);
+  if (!(dropout >= 0 && dropout < 1)) return fail("dropout (" + std::to_string(dropout) + ") must be in [0, 1)");
   return true;
 }
 
@@ -64,8 +66,8 @@ double kl_weight(double beta, int64_t step, int64_t warmup_steps) {
   return beta * std::min(1.0, static_cast<double>(step) / static_cast<double>(warmup_steps));
 }
 
-LossContext::LossContext(Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
-                         const NetworkConfig& network_config, int iterations_, bool plain, torch::Device device)
+LossContext::LossContext(io::Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
+                         const io::NetworkConfig& network_config, int iterations_, bool plain, torch::Device device)
     : network(network_config), basis(projection, torch::kFloat32, device), iterations(iterations_),
       plain_projection(plain) {
   policy.variant = variant;
@@ -73,7 +75,7 @@ LossContext::LossContext(Variant variant, const projection::Settings& projection
   policy.projection.iterations = iterations_;
   policy.projection.obstacles = network_config.nearest_points;
   policy.band = band;
-  if (variant != Variant::bc)
+  if (variant != io::Variant::bc)
     constants = std::make_shared<ProjectionConstants>(policy.projection, torch::kFloat32, device);
 }
 
@@ -83,7 +85,7 @@ LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& c
       policy_outputs(f.outputs, batch.observation, batch.obstacles, c.policy, c.basis, c.network);
   LossTensors loss;
   torch::Tensor plan;
-  if (c.policy.variant == Variant::bc) {
+  if (c.policy.variant == io::Variant::bc) {
     plan = inputs.xi_bar;
     loss.residual = torch::zeros({}, plan.options());
   } else {
@@ -96,7 +98,7 @@ LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& c
   const Posterior& q = f.posterior;
   loss.kl = (0.5 * (q.mean.pow(2) + q.sigma.pow(2) - 1.0 - 2.0 * q.sigma.log())).sum(1).mean();
   loss.total = 0.5 * loss.mse + beta_t * loss.kl;
-  if (c.policy.variant != Variant::bc) loss.total = loss.total + 0.5 * loss.residual;
+  if (c.policy.variant != io::Variant::bc) loss.total = loss.total + 0.5 * loss.residual;
   return loss;
 }
 
@@ -127,10 +129,10 @@ std::uint64_t mix(std::uint64_t a, std::uint64_t b) {  // splitmix64 of a combin
 
 // The fields a resumed run must share with the checkpoint: they change the loss trajectory.
 std::string resume_identity(const TrainingSettings& s, const Dataset& data) {
-  return std::string("variant=") + to_string(s.variant) + " network=" + network_json(s.network) +
-         " dropout=" + std::to_string(s.network.dropout) + " batch=" + std::to_string(s.batch) +
+  return std::string("variant=") + io::to_string(s.variant) + " network=" + s.network.to_json() +
+         " dropout=" + std::to_string(s.dropout) + " batch=" + std::to_string(s.batch) +
          " seed=" + std::to_string(s.seed) + " iterations=" + std::to_string(s.iterations) +
-         " rows=" + std::to_string(data.rows()) + " projection=" + projection_json(data.projection);
+         " rows=" + std::to_string(data.rows()) + " projection=" + io::projection_settings_json(data.projection);
 }
 
 using Clock = std::chrono::steady_clock;
@@ -144,6 +146,7 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data)
   settings_.network.nearest_points = static_cast<int>(data_.nearest_points());
   settings_.network.coefficients = data_.coefficients();
   settings_.network.steps = data_.projection.steps;
+  settings_.network.outputs = settings_.network.expected_outputs();
   std::string error;
   if (!settings_.validate(&error)) throw std::invalid_argument("training settings: " + error);
 
@@ -152,7 +155,7 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data)
   if (device_.is_cuda()) data_.to(device_);  // batches are gathered on the GPU
 
   reseed(-1);  // the initial weights depend on the seed alone
-  model_ = Cvae(settings_.network);
+  model_ = Cvae(settings_.network, settings_.dropout);
   model_->set_normalization(compute_normalization(data_, split_.train, settings_.network, settings_.band));
   model_->to(device_);
   optimizer_ = std::make_unique<torch::optim::Adam>(model_->parameters(),
@@ -325,7 +328,7 @@ ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std:
   t.learning_rate = settings_.learning_rate;
   t.learning_rate_final = settings_.learning_rate_final < 0 ? settings_.learning_rate : settings_.learning_rate_final;
   t.beta = settings_.beta;
-  t.dropout = settings_.network.dropout;
+  t.dropout = settings_.dropout;
   t.iterations = settings_.iterations;
   t.plain_projection = settings_.plain_projection;
   t.device = device_.str();

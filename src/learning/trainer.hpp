@@ -35,9 +35,11 @@ namespace occtrack::learning {
 struct ModelMetadata;  // export.hpp
 
 struct TrainingSettings {
-  Variant variant = Variant::cvae;
-  /// Network sizes; cloud_points, nearest_points, coefficients and steps are overwritten from the data.
-  NetworkConfig network;
+  io::Variant variant = io::Variant::cvae;
+  /// Network sizes (the model file's); cloud_points, nearest_points, coefficients, steps and outputs are
+  /// overwritten from the data.
+  io::NetworkConfig network;
+  double dropout = 0.3;          ///< PointNet's dropout probability (training only; recorded under `training`)
   int64_t steps = 20000;         ///< optimisation steps in all (a resumed run continues up to this)
   int64_t batch = 256;           ///< rows per mini-batch (cut to the training rows when there are fewer)
   double learning_rate = 1e-3;   ///< Adam, at step 0
@@ -84,10 +86,10 @@ double kl_weight(double beta, int64_t step, int64_t warmup_steps);
 
 /// What the loss needs besides the model and the batch; built once for a device.
 struct LossContext {
-  LossContext(Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
-              const NetworkConfig& network, int iterations, bool plain_projection, torch::Device device);
+  LossContext(io::Variant variant, const projection::Settings& projection, const core::TrackingBand& band,
+              const io::NetworkConfig& network, int iterations, bool plain_projection, torch::Device device);
   PolicySettings policy;
-  NetworkConfig network;
+  io::NetworkConfig network;
   TrajectoryBasis basis;
   std::shared_ptr<ProjectionConstants> constants;  ///< null for BC
   int iterations = 50;

@@ -1,5 +1,6 @@
 // A model file with random weights (docs/learning.md's tensors and metadata), for tests and benchmarks that
 // need a model before a trained one exists.
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -17,6 +18,40 @@ io::TensorFile random_model(const NetworkConfig& network, const projection::Sett
   if (network.coefficients != projection.coefficients() || network.steps != projection.steps)
     throw std::invalid_argument("random_model: network coefficients and steps must match the projection's");
 
+  io::ModelFile m;
+  m.source = "random model";
+  m.variant = io::parse_variant(variant);
+  m.network = network;
+  m.projection = projection;
+  m.band = core::TrackingBand{};
+  m.metadata["training"] = nlohmann::json{{"random", true}, {"seed", seed}}.dump();
+  m.metadata["created_by"] = "occtrack policy::random_model";
+
+  const int O = network.observation, n = network.coefficients, m_steps = network.steps;
+  const core::TrackingBand& band = *m.band;
+  // Fixed normalisation: observation std 3 m for the target position, cloud std 3 m, xi standard.
+  std::vector<float> observation_std(O, 1.0f);
+  for (int i = 2; i < std::min(O, 4); ++i) observation_std[i] = 3.0f;
+  // Outputs around a straight path to (3, 0): terminal, via points on it, distance bounds at the band.
+  const OutputLayout y(network);
+  const double reach = 3.0;
+  std::vector<float> offset(y.size, 0.0f), scale(y.size, 0.1f);
+  offset[y.terminal] = static_cast<float>(reach);
+  scale[y.terminal] = scale[y.terminal + 1] = 1.0f;
+  scale[y.terminal + 2] = scale[y.terminal + 3] = 0.3f;
+  const double s1 = double(projection.via_step_1) / (m_steps - 1), s2 = double(projection.via_step_2) / (m_steps - 1);
+  offset[y.via] = static_cast<float>(reach * s1);
+  offset[y.via + 2] = static_cast<float>(reach * s2);
+  for (int i = 0; i < 4; ++i) scale[y.via + i] = 0.5f;
+  for (int k = 0; k < m_steps; ++k) {
+    offset[y.distance_min + k] = static_cast<float>(band.min);
+    offset[y.distance_max + k] = static_cast<float>(band.max);
+  }
+  for (int i = 0; i < n; ++i) {
+    offset[y.xi_bar + i] = static_cast<float>(reach * i / (n - 1));  // Bernstein coefficients of a line
+    scale[y.xi_bar + i] = scale[y.xi_bar + n + i] = 0.5f;
+  }
+
   std::mt19937_64 rng(seed);
   auto uniform = [&](std::int64_t count, double lo, double hi) {
     std::uniform_real_distribution<double> u(lo, hi);
@@ -25,86 +60,35 @@ io::TensorFile random_model(const NetworkConfig& network, const projection::Sett
     return v;
   };
   io::TensorFile f;
-  f.source = "random model";
-  // torch's default initialisation of nn.Linear: U(-1/sqrt(in), 1/sqrt(in)) for weight and bias.
-  auto linear = [&](const std::string& name, std::int64_t out, std::int64_t in) {
-    const double k = 1.0 / std::sqrt(static_cast<double>(in));
-    f.put(name + ".weight", {out, in}, uniform(out * in, -k, k));
-    f.put(name + ".bias", {out}, uniform(out, -k, k));
-  };
-  // Batch-norm statistics near the identity, but not equal to it, so that folding is exercised.
-  auto batch_norm = [&](const std::string& name, std::int64_t width) {
-    f.put(name + ".weight", {width}, uniform(width, 0.8, 1.2));
-    f.put(name + ".bias", {width}, uniform(width, -0.1, 0.1));
-    f.put(name + ".running_mean", {width}, uniform(width, -0.1, 0.1));
-    f.put(name + ".running_var", {width}, uniform(width, 0.5, 1.5));
-  };
-
-  const int O = network.observation, F = network.features, H = network.hidden, Z = network.latent;
-  const int n = network.coefficients, n2 = 2 * n, m = network.steps;
-  const core::TrackingBand band;
-
-  f.put("norm.observation.mean", {O}, std::vector<float>(O, 0.0f));
-  std::vector<float> observation_std(O, 1.0f);
-  for (int i = 2; i < std::min(O, 4); ++i) observation_std[i] = 3.0f;  // target position, metres
-  f.put("norm.observation.std", {O}, observation_std);
-  f.put("norm.cloud.mean", {2}, std::vector<float>{0.0f, 0.0f});
-  f.put("norm.cloud.std", {2}, std::vector<float>{3.0f, 3.0f});
-  f.put("norm.xi.mean", {n2}, std::vector<float>(n2, 0.0f));
-  f.put("norm.xi.std", {n2}, std::vector<float>(n2, 1.0f));
-
-  // Outputs around a straight path to (3, 0): terminal, via points on it, distance bounds at the band.
-  const OutputLayout y(network);
-  const double reach = 3.0;
-  std::vector<float> offset(y.size, 0.0f), scale(y.size, 0.1f);
-  offset[y.terminal] = static_cast<float>(reach);
-  scale[y.terminal] = scale[y.terminal + 1] = 1.0f;
-  scale[y.terminal + 2] = scale[y.terminal + 3] = 0.3f;
-  const double s1 = double(projection.via_step_1) / (m - 1), s2 = double(projection.via_step_2) / (m - 1);
-  offset[y.via] = static_cast<float>(reach * s1);
-  offset[y.via + 2] = static_cast<float>(reach * s2);
-  for (int i = 0; i < 4; ++i) scale[y.via + i] = 0.5f;
-  for (int k = 0; k < m; ++k) {
-    offset[y.distance_min + k] = static_cast<float>(band.min);
-    offset[y.distance_max + k] = static_cast<float>(band.max);
+  double layer_bound = 1.0;  // of the last weight, for its bias
+  for (const io::TensorSpec& t : io::model_tensors(network)) {
+    const std::int64_t count = t.shape[0] * (t.shape.size() > 1 ? t.shape[1] : 1);
+    std::vector<float> values;
+    switch (t.role) {
+      case io::TensorRole::input_mean: values.assign(count, 0.0f); break;
+      case io::TensorRole::input_std:
+        values = t.name == "norm.observation.std" ? observation_std
+                 : t.name == "norm.cloud.std"     ? std::vector<float>(count, 3.0f)
+                                                  : std::vector<float>(count, 1.0f);
+        break;
+      case io::TensorRole::output_offset: values = offset; break;
+      case io::TensorRole::output_scale: values = scale; break;
+      // torch's default initialisation of nn.Linear: U(-1/sqrt(in), 1/sqrt(in)) for weight and bias.
+      case io::TensorRole::weight:
+        layer_bound = 1.0 / std::sqrt(static_cast<double>(t.shape[1]));
+        values = uniform(count, -layer_bound, layer_bound);
+        break;
+      case io::TensorRole::bias: values = uniform(count, -layer_bound, layer_bound); break;
+      // Batch-norm statistics near the identity, but not equal to it, so that folding is exercised.
+      case io::TensorRole::norm_weight: values = uniform(count, 0.8, 1.2); break;
+      case io::TensorRole::norm_bias: values = uniform(count, -0.1, 0.1); break;
+      case io::TensorRole::norm_mean: values = uniform(count, -0.1, 0.1); break;
+      case io::TensorRole::norm_variance: values = uniform(count, 0.5, 1.5); break;
+    }
+    f.put(t.name, t.shape, values);
   }
-  for (int i = 0; i < n; ++i) {
-    offset[y.xi_bar + i] = static_cast<float>(reach * i / (n - 1));  // Bernstein coefficients of a line
-    scale[y.xi_bar + i] = scale[y.xi_bar + n + i] = 0.5f;
-  }
-  f.put("norm.output.offset", {y.size}, offset);
-  f.put("norm.output.scale", {y.size}, scale);
-
-  std::int64_t in = 2;
-  for (std::size_t i = 0; i < network.pointnet_widths.size(); ++i) {
-    const std::int64_t out = network.pointnet_widths[i];
-    linear("pointnet.conv" + std::to_string(i), out, in);
-    batch_norm("pointnet.bn" + std::to_string(i), out);
-    in = out;
-  }
-  linear("pointnet.fc0", network.pointnet_hidden, in);
-  batch_norm("pointnet.fc_bn0", network.pointnet_hidden);
-  linear("pointnet.fc1", F, network.pointnet_hidden);
-  for (int i = 0; i < network.layers; ++i) {
-    linear("encoder.fc" + std::to_string(i), H, i == 0 ? O + F + n2 : H);
-    batch_norm("encoder.bn" + std::to_string(i), H);
-  }
-  linear("encoder.mean", Z, H);
-  linear("encoder.std", Z, H);
-  for (int i = 0; i < network.layers; ++i) {
-    linear("decoder.fc" + std::to_string(i), H, i == 0 ? Z + O + F : H);
-    batch_norm("decoder.bn" + std::to_string(i), H);
-  }
-  linear("decoder.out", y.size, H);
-
-  f.metadata["format"] = kModelFormat;
-  f.metadata["variant"] = std::move(variant);
-  f.metadata["network"] = network.to_json();
-  f.metadata["projection"] = projection_json(projection);
-  f.metadata["band"] = band_json(band);
-  f.metadata["training"] = nlohmann::json{{"random", true}, {"seed", seed}}.dump();
-  f.metadata["created_by"] = "occtrack policy::random_model";
-  return f;
+  m.tensors = std::move(f.tensors);
+  return io::to_tensor_file(m);
 }
 
 }  // namespace occtrack::policy

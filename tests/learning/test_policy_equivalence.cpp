@@ -60,7 +60,7 @@ torch::Tensor tensor_of(const Eigen::Ref<const policy::Rows>& m) {
 TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
   for (const bool small : {true, false}) {
     SCOPED_TRACE(small ? "small network" : "default network");
-    learning::NetworkConfig config;  // defaults of docs/learning.md
+    io::NetworkConfig config;  // defaults of docs/learning.md
     if (small) {
       config.pointnet_widths = {8, 16, 16, 24, 32};
       config.pointnet_hidden = 24;
@@ -69,8 +69,9 @@ TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
       config.layers = 2;
       config.latent = 3;
     }
+    config.outputs = config.expected_outputs();
     torch::manual_seed(11);
-    learning::Cvae model(config);
+    learning::Cvae model(config, /*dropout=*/0.3);
     randomize(*model);
     model->eval();
 
@@ -78,10 +79,9 @@ TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
     metadata.network = config;
     metadata.projection.obstacles = config.nearest_points;
     metadata.created_by = "test_policy_equivalence";
-    const io::TensorFile file = learning::model_file(*model, metadata);
-    policy::Model eigen(file);
+    policy::Model eigen(io::validate_model_file(io::to_tensor_file(learning::model_file(*model, metadata))));
     ASSERT_EQ(eigen.network().features, config.features);
-    ASSERT_EQ(eigen.network().outputs, config.outputs());
+    ASSERT_EQ(eigen.network().outputs, config.outputs);
 
     torch::NoGradGuard no_grad;
     const int B = 7, C = config.cloud_points;
@@ -102,7 +102,7 @@ TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
     const torch::Tensor outputs = model->decode(z, observation.expand({B, 6}), features.expand({B, config.features}));
     const Eigen::VectorXf obs = rows_of(observation).row(0).transpose();
     const Eigen::VectorXf f = rows_of(features).row(0).transpose();
-    policy::Rows eigen_outputs(B, config.outputs());
+    policy::Rows eigen_outputs(B, config.outputs);
     eigen.decode(rows_of(z), obs, f, eigen_outputs);
     EXPECT_LT(mismatch(tensor_of(eigen_outputs), outputs), 1e-5) << "decoder outputs";
 

@@ -20,6 +20,8 @@
 #include "learning/networks.hpp"
 #include "learning/trainer.hpp"
 #include "occtrack/io/error.hpp"
+#include "occtrack/io/model_file.hpp"
+#include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "planners/cycle.hpp"
 
@@ -72,7 +74,7 @@ io::TensorFile dataset_file(int64_t rows, int cloud_points = 32, int nearest_poi
   const learning::Dataset d = learning::synthetic_dataset(o, settings);
   io::TensorFile f;
   f.metadata["format"] = "occtrack.dataset.v1";
-  f.metadata["projection"] = learning::projection_json(settings);
+  f.metadata["projection"] = io::projection_settings_json(settings);
   f.metadata["rows"] = std::to_string(rows);
   f.metadata["created_by"] = "test_training";
   f.put("observation", {rows, 6}, floats(d.observation));
@@ -94,7 +96,7 @@ learning::TrainingSettings small_settings() {
   s.network.features = 16;
   s.network.hidden = 32;
   s.network.layers = 2;
-  s.network.dropout = 0.1;
+  s.dropout = 0.1;
   s.batch = 16;
   s.iterations = 5;
   s.learning_rate = 3e-3;
@@ -118,8 +120,8 @@ double mean_total(const std::vector<learning::LossTerms>& history, std::size_t b
 TEST_F(Training, ShortRunLowersTheLoss) {
   const std::string data = path("data.safetensors");
   io::write_safetensors(data, dataset_file(64));
-  for (const auto variant : {learning::Variant::cvae, learning::Variant::bc}) {
-    SCOPED_TRACE(learning::to_string(variant));
+  for (const auto variant : {io::Variant::cvae, io::Variant::bc}) {
+    SCOPED_TRACE(io::to_string(variant));
     learning::TrainingSettings s = small_settings();
     s.variant = variant;
     learning::Trainer trainer(s, learning::load_dataset({data}));
@@ -140,7 +142,7 @@ TEST_F(Training, ShortRunLowersTheLoss) {
     // Eval mode (batch norm on running statistics, no dropout) on rows of the same distribution: the model
     // learnt there too.
     EXPECT_LT(summary.validation->total, first);
-    if (variant == learning::Variant::bc) EXPECT_EQ(summary.history.back().residual, 0.0);
+    if (variant == io::Variant::bc) EXPECT_EQ(summary.history.back().residual, 0.0);
     else EXPECT_GT(summary.history.back().residual, 0.0);
   }
 }
@@ -215,7 +217,7 @@ TEST_F(Training, ExportWritesEveryTensorOfTheContract) {
   io::write_safetensors(data, dataset_file(32));
   learning::TrainingSettings s = small_settings();
   s.steps = 2;
-  s.variant = learning::Variant::fixed_q;
+  s.variant = io::Variant::fixed_q;
   learning::Trainer trainer(s, learning::load_dataset({data}));
   const learning::TrainingSummary summary = trainer.run();
   const std::string out = path("model.safetensors");
@@ -223,7 +225,7 @@ TEST_F(Training, ExportWritesEveryTensorOfTheContract) {
   const io::TensorFile file = io::read_safetensors(out);
 
   // The tensor list of docs/learning.md, built here from the sizes, independently of the module tree.
-  const learning::NetworkConfig& c = trainer.settings().network;
+  const io::NetworkConfig& c = trainer.settings().network;
   const int64_t O = 6, n2 = 22, Y = 252, Z = c.latent, F = c.features, H = c.hidden, Hp = c.pointnet_hidden;
   std::map<std::string, std::vector<int64_t>> expected = {
       {"norm.observation.mean", {O}}, {"norm.observation.std", {O}}, {"norm.cloud.mean", {2}},
@@ -265,15 +267,19 @@ TEST_F(Training, ExportWritesEveryTensorOfTheContract) {
 
   EXPECT_EQ(file.meta("format"), "occtrack.model.v1");
   EXPECT_EQ(file.meta("variant"), "fixed-q");
-  learning::NetworkConfig parsed = learning::parse_network_json(file.meta("network"));
-  parsed.dropout = c.dropout;  // training only, recorded under `training`
-  EXPECT_EQ(parsed, c);
+  EXPECT_EQ(io::NetworkConfig::parse(file.meta("network"), out), c);
   const auto network = nlohmann::json::parse(file.meta("network"));
   EXPECT_EQ(network.at("outputs"), 252);
   EXPECT_EQ(network.at("cloud_points"), 32);
   EXPECT_EQ(network.at("nearest_points"), 8);
-  const projection::Settings projection = learning::parse_projection_json(file.meta("projection"));
+  const projection::Settings projection =
+      io::parse_projection_settings(file.meta("projection"), out, "projection", /*strict=*/false);
   EXPECT_EQ(projection.iterations, s.iterations);
+  EXPECT_EQ(nlohmann::json::parse(file.meta("projection")).at("training_iterations"), s.iterations);
+  // The run-time reader accepts it: the contract is the same on both sides.
+  const io::ModelFile checked = io::validate_model_file(file);
+  EXPECT_EQ(checked.variant, io::Variant::fixed_q);
+  EXPECT_EQ(checked.network, c);
   const auto band = nlohmann::json::parse(file.meta("band"));
   EXPECT_EQ(band.at("min"), 1.0);
   EXPECT_EQ(band.at("max"), 3.0);
@@ -366,17 +372,17 @@ TEST_F(Training, FixedQIsContextFillRow) {
   planners::RankingSettings ranking;
   planners::detail::Context context(ps, perception, ranking);
 
-  learning::NetworkConfig network;
+  io::NetworkConfig network;
   network.nearest_points = 4;
   torch::manual_seed(5);
-  torch::Tensor outputs = torch::randn({3, network.outputs()});
-  const learning::OutputLayout layout(network);
+  torch::Tensor outputs = torch::randn({3, network.outputs});
+  const io::OutputLayout layout(network);
   // xi_bar: one slow and two fast paths (the speed cap must act on those).
   outputs.index_put_({torch::indexing::Slice(), torch::indexing::Slice(layout.xi_bar, layout.size)},
                      torch::randn({3, 22}) * torch::tensor({0.5, 4.0, 8.0}).unsqueeze(1));
   const torch::Tensor observation = torch::randn({3, 6}), obstacles = torch::randn({3, 4, 4});
   learning::PolicySettings policy;
-  policy.variant = learning::Variant::fixed_q;
+  policy.variant = io::Variant::fixed_q;
   policy.projection = ps;
   policy.band = ranking.band;
   const learning::TrajectoryBasis basis(ps, torch::kFloat32, torch::kCPU);
@@ -411,7 +417,7 @@ TEST_F(Training, FixedQIsContextFillRow) {
   EXPECT_LE(speed, ps.speed_max + 1e-5);
 
   // cvae: q from the decoder, post-processed (velocity clamp per axis, d_min floored at band.min).
-  policy.variant = learning::Variant::cvae;
+  policy.variant = io::Variant::cvae;
   const learning::ProjectionInputs cvae = learning::policy_outputs(outputs * 5, observation, obstacles, policy, basis, network);
   EXPECT_GE(cvae.distance_min.min().item<float>(), 1.0f);
   EXPECT_LE(cvae.terminal.index({torch::indexing::Slice(), torch::indexing::Slice(2, 4)}).abs().max().item<float>(), 2.0f);

@@ -45,14 +45,12 @@ void synchronize(torch::Device device) {
 }
 
 StepTiming time_steps(const learning::Dataset& data, const learning::Batch& batch, const BenchTrainOptions& o,
-                      learning::Variant variant, int iterations, bool plain, torch::Device device) {
-  learning::NetworkConfig network;
+                      io::Variant variant, int iterations, bool plain, torch::Device device) {
+  io::NetworkConfig network = io::NetworkConfig::for_projection(data.projection);
   network.cloud_points = o.cloud_points;
   network.nearest_points = o.obstacles;
-  network.coefficients = data.coefficients();
-  network.steps = data.projection.steps;
   torch::manual_seed(1);
-  learning::Cvae model(network);
+  learning::Cvae model(network, learning::TrainingSettings().dropout);
   model->set_normalization(learning::compute_normalization(
       data, torch::arange(data.rows(), torch::kInt64), network, core::TrackingBand{}));
   model->to(device);
@@ -85,7 +83,7 @@ int run(const BenchTrainOptions& o) {
     std::cerr << "occtrack bench train-step: --device " << o.device << ": CUDA is not available\n";
     return kExitInputError;
   }
-  const learning::Variant variant = learning::parse_variant(o.variant);
+  const io::Variant variant = io::parse_variant(o.variant);
   projection::Settings settings;
   learning::SyntheticDatasetOptions synthetic;
   synthetic.rows = o.batch;
@@ -98,7 +96,7 @@ int run(const BenchTrainOptions& o) {
 
   nlohmann::json results = nlohmann::json::array();
   // The same step without the projection (BC): what the networks alone cost.
-  const StepTiming networks = time_steps(data, batch, o, learning::Variant::bc, 1, false, device);
+  const StepTiming networks = time_steps(data, batch, o, io::Variant::bc, 1, false, device);
   if (!o.json) {
     std::printf("training step (%s), batch %lld, %d obstacle points, %d cloud points, on %s\n", o.variant.c_str(),
                 static_cast<long long>(o.batch), o.obstacles, o.cloud_points, hardware.c_str());

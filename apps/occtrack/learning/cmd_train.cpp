@@ -63,7 +63,7 @@ std::string canonical_command(const TrainOptions& o) {
     << " --pointnet-widths ";
   for (std::size_t i = 0; i < s.network.pointnet_widths.size(); ++i)
     c << (i ? "," : "") << s.network.pointnet_widths[i];
-  c << " --latent " << s.network.latent << " --dropout " << s.network.dropout;
+  c << " --latent " << s.network.latent << " --dropout " << s.dropout;
   if (s.learning_rate_final >= 0) c << " --lr-final " << s.learning_rate_final;
   if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
   if (s.plain_projection) c << " --plain-projection";
@@ -74,7 +74,7 @@ std::string canonical_command(const TrainOptions& o) {
 int run(TrainOptions o) {
   const char* who = "occtrack train: ";
   keep_large_allocations();
-  o.settings.variant = learning::parse_variant(o.variant);
+  o.settings.variant = io::parse_variant(o.variant);
   if (o.threads > 0) torch::set_num_threads(o.threads);
   if (o.settings.checkpoint_path.empty() && !o.resume.empty()) o.settings.checkpoint_path = o.resume;
 
@@ -85,7 +85,7 @@ int run(TrainOptions o) {
   learning::Trainer trainer(o.settings, std::move(data));
   std::fprintf(stderr, "%s%s on %s, %lld training rows (%lld episodes), %lld validation rows (%lld episodes), "
                "K = %d (%s projection backward)\n",
-               who, learning::to_string(o.settings.variant), learning::hardware_description(trainer.device()).c_str(),
+               who, io::to_string(o.settings.variant), learning::hardware_description(trainer.device()).c_str(),
                static_cast<long long>(trainer.split().train.numel()),
                static_cast<long long>(trainer.split().train_episodes),
                static_cast<long long>(trainer.split().validation.numel()),
@@ -110,7 +110,7 @@ int run(TrainOptions o) {
   });
 
   learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by(canonical_command(o))));
-  std::printf("trained %s for %lld steps in %s: final %s\n", learning::to_string(o.settings.variant),
+  std::printf("trained %s for %lld steps in %s: final %s\n", io::to_string(o.settings.variant),
               static_cast<long long>(summary.steps), duration_text(summary.seconds).c_str(),
               loss_text(summary.final_loss).c_str());
   if (summary.validation) std::printf("  validation %s\n", loss_text(*summary.validation).c_str());
@@ -166,7 +166,7 @@ void add_train_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1 << 16))
       ->capture_default_str();
   add_bounded_option(cmd, "--latent", s.network.latent, "Z, latent size", 1, 1024);
-  add_bounded_option(cmd, "--dropout", s.network.dropout, "PointNet dropout probability", 0.0, 0.99);
+  add_bounded_option(cmd, "--dropout", s.dropout, "PointNet dropout probability", 0.0, 0.99);
   add_bounded_option(cmd, "--validation-share", s.validation_share, "Share of the episodes held out for validation",
                      0.0, 0.9);
   cmd->add_option("--validation-every", s.validation_every, "Steps between validation losses (0: at the end only)")

@@ -26,6 +26,8 @@ enum class DType { F32, F64, I32, I64 };
 
 const char* dtype_name(DType dtype);
 std::size_t dtype_size(DType dtype);
+/// "[3, 4]": a shape as messages print it.
+std::string shape_text(const std::vector<std::int64_t>& shape);
 
 struct Tensor {
   DType dtype = DType::F32;

@@ -1,6 +1,6 @@
-// The learned policy's networks at run time, in Eigen (docs/learning.md, "Model file" and "Networks"): a
-// model file is read, checked against the contract and folded for inference; PointNet encodes the cloud,
-// the decoder maps latent samples to trajectories and constraint parameters.
+// The learned policy's networks at run time, in Eigen (docs/learning.md, "Networks"): a model file, checked
+// against the contract by io::validate_model_file (io/model_file.hpp), is folded for inference; PointNet
+// encodes the cloud, the decoder maps latent samples to trajectories and constraint parameters.
 //
 // Settings, setup once, solve many:
 //
@@ -33,94 +33,35 @@
 
 #include "occtrack/core/tracking.hpp"
 #include "occtrack/io/error.hpp"
+#include "occtrack/io/model_file.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/projection/settings.hpp"
 
 namespace occtrack::policy {
 
-inline constexpr const char* kModelFormat = "occtrack.model.v1";
+/// The model file's names (io/model_file.hpp), where the run-time code has always found them.
+using io::NetworkConfig;
+using io::OutputLayout;
+using io::parse_variant;
+using io::to_string;
+using io::Variant;
 
 /// Float rows, one per sample (row-major, as the projection's problems).
 using Rows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 /// A point cloud, one (x, y) point per row.
 using Cloud = Eigen::Matrix<float, Eigen::Dynamic, 2, Eigen::RowMajor>;
 
-/// What the networks were trained for: `cvae` (the paper's policy), `bc` (no projection; the decoder's
-/// xi_bar is the plan) and `fixed-q` (nominal d_min, d_max and terminal state instead of predictions).
-enum class Variant { cvae, bc, fixed_q };
-
-/// "cvae", "bc", "fixed-q" (the metadata's spelling).
-const char* to_string(Variant variant);
-/// The variant of a metadata spelling; throws io::InputError listing the three otherwise.
-Variant parse_variant(const std::string& text);
-
-/// Sizes of the networks (docs/learning.md, "Sizes"); the metadata key `network` holds them as JSON.
-struct NetworkConfig {
-  int observation = 6;     ///< O: robot vx, vy; target x, y (relative); target vx, vy
-  int cloud_points = 200;  ///< C: perception's cloud_size
-  int nearest_points = 60; ///< N: the optimizer's obstacles (perception's nearest_count)
-  int latent = 2;          ///< Z
-  std::vector<int> pointnet_widths = {64, 64, 64, 128, 256};  ///< per-point 1x1 convolutions; the last is E
-  int pointnet_hidden = 256;  ///< H_p
-  int features = 64;          ///< F
-  int hidden = 256;           ///< H: encoder and decoder width
-  int layers = 3;             ///< L: hidden layers of the encoder and of the decoder
-  int outputs = 252;          ///< Y = 4 + 4 + 2n + m + m + 2n
-  int coefficients = 11;      ///< n = degree + 1
-  int steps = 100;            ///< m
-  double batch_norm_eps = 1e-5;
-
-  /// The default sizes, with n, m, N and Y taken from the projection settings.
-  static NetworkConfig for_projection(const projection::Settings& settings);
-  /// 8 + 4n + 2m: the decoder outputs the sizes imply.
-  int expected_outputs() const { return 8 + 4 * coefficients + 2 * steps; }
-  /// True when every size is usable (positive, Y consistent with n and m, observation 6, eps > 0).
-  /// Otherwise false, and *error names the field and the rule, e.g. "outputs (250) must be 8 + 4n + 2m = 252".
-  bool validate(std::string* error = nullptr) const;
-  /// The metadata JSON: {"observation": 6, "cloud_points": 200, ..., "batch_norm_eps": 1e-05}.
-  std::string to_json() const;
-  /// Parses the metadata JSON; throws io::InputError "SOURCE: network.KEY: rule" (unknown keys are ignored).
-  static NetworkConfig parse(const std::string& json_text, const std::string& source);
-
-  bool operator==(const NetworkConfig&) const = default;
-};
-
-/// Column offsets of the decoder outputs (docs/learning.md: terminal, via, lambda0, d_min, d_max, xi_bar).
-struct OutputLayout {
-  int terminal = 0;      ///< 4: x, y, vx, vy
-  int via = 4;           ///< 4: x1, y1, x2, y2
-  int lambda0 = 8;       ///< 2n
-  int distance_min = 0;  ///< m
-  int distance_max = 0;  ///< m
-  int xi_bar = 0;        ///< 2n
-  int size = 0;          ///< Y
-
-  explicit OutputLayout(const NetworkConfig& network);
-};
-
-/// The metadata JSON of projection settings (the projection-case "config" layout: degree, steps, horizon,
-/// iterations, obstacle_radius, speed_min, speed_max, accel_max, via_steps [s1, s2], rho {...}).
-std::string projection_json(const projection::Settings& settings);
-/// Parses it; iterations and rho are optional (defaults kept), unknown keys are ignored. Throws io::InputError
-/// "SOURCE: projection.KEY: rule".
-projection::Settings parse_projection_json(const std::string& json_text, const std::string& source);
-/// The metadata JSON of a tracking band: {"min": 1.0, "reference": 2.0, "max": 3.0}.
-std::string band_json(const core::TrackingBand& band);
-
 class Model {
  public:
-  /// Reads a model file and checks it (see the constructor); throws io::InputError naming the file and what
-  /// differs (a missing file included).
+  /// io::read_model_file, then the constructor: throws io::InputError naming the file and what differs from
+  /// the contract (a missing file included).
   static Model load(const std::string& path);
 
-  /// Checks a model file already in memory (file.source names it in messages, "model" when empty) and folds
-  /// it for inference. Throws io::InputError when: metadata `format` is not "occtrack.model.v1"; `variant` is
-  /// not cvae, bc or fixed-q; `network` or `projection` is missing, not JSON, lacks a field or breaks
-  /// NetworkConfig::validate(); network and projection disagree (n, m); a tensor of docs/learning.md is
-  /// missing, has another shape ("tensor 'decoder.out.weight' has shape [252, 128], expected [252, 256]",
-  /// prefixed by the metadata field it contradicts when there is one: "metadata network.features is 32, the
-  /// tensors say 64"), or holds a non-finite value; a normalisation std or batch-norm variance is not positive.
+  /// Folds a checked model file for inference (batch norms into the layers before them, the input
+  /// normalisation into the first layers, the output scale and offset into the decoder's last layer).
   /// Reserves workspaces for 30 samples and network().cloud_points points.
+  explicit Model(const io::ModelFile& file);
+  /// io::validate_model_file(file), then the above: throws io::InputError as validate_model_file does.
   explicit Model(const io::TensorFile& file);
   ~Model();
   Model(Model&&) noexcept;
@@ -173,7 +114,8 @@ class Model {
 
 /// A model file with random weights of the right shapes and plausible normalisation (outputs near a straight
 /// path towards +x, distance bounds near the default band), for tests and benchmarks before a trained model
-/// exists. Deterministic in the seed. `variant` is written as given ("cvae", "bc", "fixed-q").
+/// exists, written through io::to_tensor_file. Deterministic in the seed. `variant` is "cvae", "bc" or
+/// "fixed-q" (io::InputError otherwise).
 io::TensorFile random_model(const NetworkConfig& network, const projection::Settings& projection, std::string variant,
                             std::uint64_t seed);
 
