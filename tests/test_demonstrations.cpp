@@ -10,6 +10,7 @@
 #include <random>
 #include <unistd.h>
 
+#include "occtrack/io/dataset_file.hpp"
 #include "occtrack/io/error.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/io/scenario.hpp"
@@ -172,7 +173,7 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   ASSERT_GT(report.rows, 100);
 
   const std::string path = temp_path("demo.safetensors");
-  sim::write_demonstrations(path, data);
+  io::write_dataset_file(path, data);
   const io::TensorFile file = io::read_safetensors(path);
   const std::int64_t S = report.rows;
   EXPECT_EQ(file.at("observation", {S, 6}).dtype, io::DType::F32);
@@ -209,7 +210,7 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   EXPECT_EQ(generator.at("duration"), 3.0);
   EXPECT_FALSE(generator.contains("jobs"));
 
-  const sim::Demonstrations back = sim::read_demonstrations(path);
+  const sim::Demonstrations back = io::read_dataset_file(path);
   EXPECT_EQ(back.rows, S);
   EXPECT_EQ(back.observation, data.observation);
   EXPECT_EQ(back.cloud, data.cloud);
@@ -227,7 +228,7 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   // The relative target is about 2 m away at the start (the generator's robot_distance).
   EXPECT_NEAR(std::hypot(back.observation[2], back.observation[3]), 2.0, 0.6);
 
-  const sim::DemonstrationStatistics stats = sim::demonstration_statistics(back);
+  const io::DatasetStatistics stats = io::dataset_statistics(back);
   EXPECT_EQ(stats.episodes, 2);
   EXPECT_GT(stats.plan_speed_mean, 0.0);
   // Plausible speeds, not garbage: the projection's speed bound (2 m/s) is a penalty, not a hard limit, and
@@ -240,12 +241,12 @@ TEST(Demonstrations, SameSeedGivesIdenticalBytesWhateverTheJobs) {
   sim::DemonstrationSettings settings = tiny();
   settings.duration = 1.5;
   settings.label_every = 2;
-  const auto one = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  const auto one = io::serialize_safetensors(io::to_tensor_file(sim::generate_demonstrations(settings)));
   settings.jobs = 2;
-  const auto two = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  const auto two = io::serialize_safetensors(io::to_tensor_file(sim::generate_demonstrations(settings)));
   EXPECT_TRUE(one == two) << "jobs 1 and 2 differ";
   settings.first_seed = 6000;
-  const auto other = io::serialize_safetensors(sim::to_tensor_file(sim::generate_demonstrations(settings)));
+  const auto other = io::serialize_safetensors(io::to_tensor_file(sim::generate_demonstrations(settings)));
   EXPECT_FALSE(one == other) << "another seed should make other worlds";
 }
 
@@ -340,13 +341,13 @@ TEST(Demonstrations, ReaderRefusesFilesThatBreakTheContractNamingFileAndTensor) 
   s.expert.perception.nearest_count = 2;
   d.metadata = sim::demonstration_metadata(s);
   const std::string path = temp_path("contract.safetensors");
-  sim::write_demonstrations(path, d);
-  EXPECT_EQ(sim::read_demonstrations(path).episode, d.episode);
+  io::write_dataset_file(path, d);
+  EXPECT_EQ(io::read_dataset_file(path).episode, d.episode);
 
   const auto expect_refused = [&](const io::TensorFile& file, const std::string& what) {
     io::write_safetensors(path, file);
     try {
-      sim::read_demonstrations(path);
+      io::read_dataset_file(path);
       ADD_FAILURE() << "accepted a file with " << what;
     } catch (const io::InputError& e) {
       const std::string message = e.what();
@@ -354,41 +355,41 @@ TEST(Demonstrations, ReaderRefusesFilesThatBreakTheContractNamingFileAndTensor) 
       EXPECT_NE(message.find(what), std::string::npos) << message;
     }
   };
-  io::TensorFile file = sim::to_tensor_file(d);
+  io::TensorFile file = io::to_tensor_file(d);
   file.metadata["format"] = "occtrack.model.v1";
   expect_refused(file, "format");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.tensors.erase("cloud");
   expect_refused(file, "cloud");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.put("obstacles", {2, 3, 4}, std::vector<float>(24, 0.0f));  // 3 points, the metadata says 2
   expect_refused(file, "obstacles");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.put("episode", {2}, std::vector<float>{0.0f, 0.0f});
   expect_refused(file, "episode");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.put("expert_xi", {2, 20}, std::vector<float>(40, 0.0f));
   expect_refused(file, "expert_xi");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.metadata["rows"] = "3";
   expect_refused(file, "observation");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.metadata["perception"] = "{not json";
   expect_refused(file, "perception");
-  file = sim::to_tensor_file(d);
+  file = io::to_tensor_file(d);
   file.put("expert_cost", {2}, std::vector<float>{1.0f, NAN});
   expect_refused(file, "expert_cost");
   std::filesystem::remove(path);
 
   // Appending renumbers episodes and refuses other sizes.
   sim::Demonstrations merged;
-  sim::append_demonstrations(merged, d);
-  sim::append_demonstrations(merged, d);
+  io::append_dataset(merged, d);
+  io::append_dataset(merged, d);
   EXPECT_EQ(merged.rows, 4);
   EXPECT_EQ(merged.episode, (std::vector<std::int32_t>{0, 0, 1, 1}));
   EXPECT_EQ(merged.metadata.at("rows"), "4");
-  EXPECT_NO_THROW(sim::to_tensor_file(merged));
+  EXPECT_NO_THROW(io::to_tensor_file(merged));
   sim::Demonstrations other = d;
   other.metadata["projection"] = "{}";
-  EXPECT_THROW(sim::append_demonstrations(merged, other), std::invalid_argument);
+  EXPECT_THROW(io::append_dataset(merged, other), std::invalid_argument);
 }
