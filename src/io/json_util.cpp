@@ -7,11 +7,28 @@
 namespace occtrack::io::detail {
 
 namespace {
+
+// Messages quote at most this deep: nlohmann's dump() recurses once per level, and a value nested 100000
+// levels deep (a few hundred kilobytes of '[') overflows the stack (tests/test_fuzz_regressions.cpp).
+constexpr int kMaxDescribedDepth = 64;
+
+bool deeper_than(const json& value, int levels) {
+  if (!value.is_structured()) return false;
+  if (levels == 0) return true;
+  for (const json& element : value)
+    if (deeper_than(element, levels - 1)) return true;
+  return false;
+}
+
 std::string describe(const json& value) {
+  if (deeper_than(value, kMaxDescribedDepth))
+    return std::string(value.is_array() ? "a list" : "an object") + " nested more than " +
+           std::to_string(kMaxDescribedDepth) + " levels deep";
   std::string text = value.dump();
   if (text.size() > 40) text = text.substr(0, 37) + "...";
   return text;
 }
+
 }  // namespace
 
 void JsonReader::fail(const std::string& path, const std::string& rule) const {

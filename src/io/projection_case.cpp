@@ -1,6 +1,7 @@
 #include "occtrack/io/projection_case.hpp"
 
 #include <string>
+#include <vector>
 
 #include "json_util.hpp"
 
@@ -24,12 +25,14 @@ RowMatrix<double> read_rows(const JsonReader& r, const json& value, const std::s
   if (static_cast<int>(value.size()) != batch)
     r.fail(path, "expected " + std::to_string(batch) + " samples (the batch size of inputs.robot_velocity), got " +
                      std::to_string(value.size()));
-  RowMatrix<double> out(batch, cols);
+  // Rows are read before the matrix is sized: B and cols come from elsewhere in the file (B up to 10^6,
+  // cols up to 10^4), and a list of B empty rows must not allocate B x cols numbers before it is refused.
+  std::vector<double> values;
   for (int b = 0; b < batch; ++b) {
     const std::vector<double> row = r.numbers(value[b], at(path, b), cols);
-    for (int c = 0; c < cols; ++c) out(b, c) = row[c];
+    values.insert(values.end(), row.begin(), row.end());
   }
-  return out;
+  return Eigen::Map<const RowMatrix<double>>(values.data(), batch, cols);
 }
 
 projection::Settings read_settings(const JsonReader& r, const json& config, const std::string& p, bool strict) {
@@ -108,7 +111,7 @@ ProjectionCase parse_projection_case(const std::string& text, const std::string&
   validate_config(r, c.settings);
   const int n = c.settings.coefficients(), m = c.settings.steps;
 
-  c.problem.obstacles.resize(batch, 4 * N);
+  std::vector<double> points;  // read before sizing the matrix, as in read_rows
   for (int b = 0; b < batch; ++b) {
     const std::string path = at("inputs.obstacles", b);
     if (!obstacles[b].is_array() || static_cast<int>(obstacles[b].size()) != N)
@@ -116,9 +119,10 @@ ProjectionCase parse_projection_case(const std::string& text, const std::string&
                        (obstacles[b].is_array() ? std::to_string(obstacles[b].size()) : std::string("no list")));
     for (int j = 0; j < N; ++j) {
       const std::vector<double> point = r.numbers(obstacles[b][j], at(path, j), 4);
-      for (int i = 0; i < 4; ++i) c.problem.obstacles(b, 4 * j + i) = point[i];
+      points.insert(points.end(), point.begin(), point.end());
     }
   }
+  c.problem.obstacles = Eigen::Map<const RowMatrix<double>>(points.data(), batch, 4 * N);
   c.problem.target = read_rows(r, r.member(inputs, "inputs", "target"), "inputs.target", batch, 4);
   c.problem.terminal = read_rows(r, r.member(inputs, "inputs", "terminal"), "inputs.terminal", batch, 4);
   c.problem.via_points = read_rows(r, r.member(inputs, "inputs", "via_points"), "inputs.via_points", batch, 4);

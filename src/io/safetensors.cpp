@@ -155,7 +155,8 @@ TensorFile parse_safetensors(const std::vector<unsigned char>& bytes, const std:
   json header;
   try {
     header = json::parse(header_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double's range (1e400): both are bad input.
     fail(source, std::string("safetensors header is not valid JSON: ") + e.what());
   }
   if (!header.is_object()) fail(source, "safetensors header is not a JSON object");
@@ -189,7 +190,10 @@ TensorFile parse_safetensors(const std::vector<unsigned char>& bytes, const std:
     for (const auto& d : shape) {
       if (!d.is_number_unsigned()) fail(source, where + ": shape entries must be non-negative integers");
       const auto v = d.get<std::uint64_t>();
-      if (v != 0 && numel > std::numeric_limits<std::uint64_t>::max() / 16 / v)
+      // Each dimension on its own too: after a 0, the product stays 0 whatever follows, and a dimension
+      // beyond int64 would be stored negative ([0, 18446744073709551615]; tests/test_fuzz_regressions.cpp).
+      if (v > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) ||
+          (v != 0 && numel > std::numeric_limits<std::uint64_t>::max() / 16 / v))
         fail(source, where + ": shape is too large");
       numel *= v;
       t.shape.push_back(static_cast<std::int64_t>(v));
