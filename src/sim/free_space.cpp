@@ -65,7 +65,7 @@ std::vector<Vec2> FreeSpace::route(const Vec2& from, const Vec2& to) const {
   std::vector<char> closed(n, 0);
   using Entry = std::pair<std::int64_t, std::size_t>;  // (cost + heuristic, cell): ties broken by cell index
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
-  auto heuristic = [&](std::size_t c) -> std::int64_t {
+  auto heuristic = [&, gi = gi, gj = gj](std::size_t c) -> std::int64_t {
     const std::int64_t di = std::abs(static_cast<int>(c % nx_) - gi), dj = std::abs(static_cast<int>(c / nx_) - gj);
     return 10 * std::max(di, dj) + 4 * std::min(di, dj);
   };
