@@ -11,6 +11,7 @@ packages=(
   libgtest-dev googletest libbenchmark-dev       # tests and benchmarks
   python3                                        # the command-line tests edit JSON files with it
   libtorch-dev libopenblas0-pthread              # training (src/learning); OpenBLAS: ~20x faster than reference BLAS
+  clang-14 libclang-rt-14-dev                    # the fuzz targets (fuzz/, libFuzzer); CI runs them
 )
 
 missing=()
