@@ -100,6 +100,33 @@ TEST(FuzzRegressions, SafetensorsDimensionBeyondInt64) {
   }
 }
 
+// A NUL in a key (YAML '\0...', JSON "\u0000"): the message named the key as it was, and what() ended at the
+// NUL, right after "FILE: ". Control characters in names from the file are now written \xNN.
+TEST(FuzzRegressions, NulInAKeyIsWrittenOutInTheMessage) {
+  const std::string scenario = (kRegressions / "scenario-nul-in-key.bin").string();
+  try {
+    io::read_scenario(scenario);
+    FAIL() << "expected an io::InputError";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(scenario + ": \\x00Mation8 naame7], yaw:", 0), 0u) << e.what();
+  }
+  const std::string projection_case = (kRegressions / "projection_case-nul-in-key.bin").string();
+  try {
+    io::read_projection_case(projection_case);
+    FAIL() << "expected an io::InputError";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(projection_case + ": \\x00: unknown key (expected one of: format,", 0), 0u)
+        << e.what();
+  }
+  try {
+    io::parse_projection_case(R"({"format": "occtrack.\u0007"})", "bell.json");
+    FAIL() << "expected an io::InputError";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "bell.json: format: expected \"occtrack.projection-case.v1\", got \"occtrack.\\x07\"");
+  }
+}
+
 // A value nested 100000 levels deep where a string is expected: the message quoted it with json::dump(), which
 // recurses per level and overflowed the stack. Built here (200 KB).
 TEST(FuzzRegressions, ProjectionCaseDeeplyNestedValueInAMessage) {

@@ -31,6 +31,23 @@ std::string describe(const json& value) {
 
 }  // namespace
 
+std::string printable(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+    } else {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 15];
+    }
+  }
+  return out;
+}
+
 void JsonReader::fail(const std::string& path, const std::string& rule) const {
   throw InputError(source_ + ": " + path + ": " + rule);
 }
@@ -52,7 +69,8 @@ void JsonReader::only_keys(const json& object, const std::string& path,
     if (!known) {
       std::string list;
       for (const char* key : allowed) list += std::string(list.empty() ? "" : ", ") + key;
-      fail(path.empty() ? it.key() : path + "." + it.key(), "unknown key (expected one of: " + list + ")");
+      const std::string key = printable(it.key());
+      fail(path.empty() ? key : path + "." + key, "unknown key (expected one of: " + list + ")");
     }
   }
 }

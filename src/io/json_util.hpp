@@ -37,6 +37,10 @@ class JsonReader {
   std::string source_;
 };
 
+/// `text` (a key or value from the file) fit for a message: control characters and NUL written as \xNN, the
+/// rest unchanged. A NUL would end the message at what() (the CLI prints only that far).
+std::string printable(const std::string& text);
+
 json parse_json_text(const std::string& text, const std::string& source);
 std::string read_text_file(const std::string& path);
 

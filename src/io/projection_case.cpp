@@ -87,7 +87,8 @@ ProjectionCase parse_projection_case(const std::string& text, const std::string&
   r.only_keys(doc, "", {"format", "name", "description", "config", "inputs", "expected"});
   const std::string format = r.string(r.member(doc, "", "format"), "format");
   if (format != kProjectionCaseFormat)
-    r.fail("format", "expected \"" + std::string(kProjectionCaseFormat) + "\", got \"" + format + "\"");
+    r.fail("format",
+           "expected \"" + std::string(kProjectionCaseFormat) + "\", got \"" + detail::printable(format) + "\"");
 
   ProjectionCase c;
   if (doc.contains("name")) c.name = r.string(doc["name"], "name");

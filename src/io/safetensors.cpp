@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "json_util.hpp"
 #include "occtrack/io/error.hpp"
 
 namespace occtrack::io {
@@ -172,18 +173,19 @@ TensorFile parse_safetensors(const std::vector<unsigned char>& bytes, const std:
     if (name == "__metadata__") {
       if (!entry.is_object()) fail(source, "__metadata__ must be an object of strings");
       for (auto m = entry.begin(); m != entry.end(); ++m) {
-        if (!m.value().is_string()) fail(source, "__metadata__." + m.key() + " must be a string");
+        if (!m.value().is_string()) fail(source, "__metadata__." + detail::printable(m.key()) + " must be a string");
         file.metadata[m.key()] = m.value().get<std::string>();
       }
       continue;
     }
-    const std::string where = "tensor '" + name + "'";
+    const std::string where = "tensor '" + detail::printable(name) + "'";
     if (!entry.is_object() || !entry.contains("dtype") || !entry.contains("shape") || !entry.contains("data_offsets"))
       fail(source, where + " needs dtype, shape and data_offsets");
     if (!entry["dtype"].is_string()) fail(source, where + ": dtype must be a string");
     Tensor t;
     const std::string dtype = entry["dtype"].get<std::string>();
-    if (!parse_dtype(dtype, t.dtype)) fail(source, where + " has dtype " + dtype + " (supported: F32, F64, I32, I64)");
+    if (!parse_dtype(dtype, t.dtype))
+      fail(source, where + " has dtype " + detail::printable(dtype) + " (supported: F32, F64, I32, I64)");
     const json& shape = entry["shape"];
     if (!shape.is_array()) fail(source, where + ": shape must be a list");
     std::uint64_t numel = 1;

@@ -65,6 +65,7 @@ std::string describe(const YAML::Node& node) {
   }
   std::string text = node.Scalar();
   if (text.size() > 40) text = text.substr(0, 37) + "...";
+  text = detail::printable(text);
   return quoted(node) ? "the string \"" + text + "\"" : text;
 }
 
@@ -96,7 +97,7 @@ class YamlReader {
       if (!known) {
         std::string list;
         for (const char* name : allowed) list += std::string(list.empty() ? "" : ", ") + name;
-        fail(key_path(path, key), "unknown key (expected one of: " + list + ")", it->first);
+        fail(key_path(path, detail::printable(key)), "unknown key (expected one of: " + list + ")", it->first);
       }
       if (!seen.insert(key).second) fail(key_path(path, key), "key given twice", it->first);
     }
@@ -211,13 +212,14 @@ core::ObstacleSpec read_obstacle(const YamlReader& r, const YAML::Node& node, co
   if (node.size() != 1) {
     std::string keys;
     for (auto it = node.begin(); it != node.end(); ++it)
-      keys += (keys.empty() ? "" : ", ") + (it->first.IsScalar() ? it->first.Scalar() : describe(it->first));
+      keys += (keys.empty() ? "" : ", ") +
+              (it->first.IsScalar() ? detail::printable(it->first.Scalar()) : describe(it->first));
     r.fail(path, "must be exactly one of `circle:` or `box:`, got " + std::to_string(node.size()) + " keys" +
                      (keys.empty() ? std::string() : " (" + keys + ")"),
            node);
   }
   const auto entry = node.begin();
-  const std::string kind = entry->first.IsScalar() ? entry->first.Scalar() : describe(entry->first);
+  const std::string kind = entry->first.IsScalar() ? detail::printable(entry->first.Scalar()) : describe(entry->first);
   const YAML::Node body = entry->second;
   const std::string body_path = path + "." + kind;
 
