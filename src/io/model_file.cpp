@@ -131,6 +131,27 @@ bool NetworkConfig::validate(std::string* error) const {
   for (const auto& f : positive)
     if (f.value < 1) return bad(std::string(f.name) + " (" + std::to_string(f.value) + ") must be positive");
   if (nearest_points < 0) return bad("nearest_points (" + std::to_string(nearest_points) + ") must not be negative");
+  // Upper bounds, so that a malformed file cannot ask for gigabytes of workspace before its tensors are
+  // checked (the cloud sizes the PointNet workspaces; found by fuzz/fuzz_model_file.cpp). Points share the
+  // projection's bound (10^5); layers and widths are far above any network occtrack trains.
+  const struct {
+    const char* name;
+    int value, max;
+  } bounded[] = {{"cloud_points", cloud_points, kMaxNetworkPoints}, {"nearest_points", nearest_points, kMaxNetworkPoints},
+                 {"latent", latent, kMaxNetworkWidth},          {"pointnet_hidden", pointnet_hidden, kMaxNetworkWidth},
+                 {"features", features, kMaxNetworkWidth},      {"hidden", hidden, kMaxNetworkWidth},
+                 {"layers", layers, kMaxNetworkLayers},         {"coefficients", coefficients, kMaxNetworkWidth},
+                 {"steps", steps, kMaxNetworkWidth}};
+  for (const auto& f : bounded)
+    if (f.value > f.max)
+      return bad(std::string(f.name) + " (" + std::to_string(f.value) + ") must be at most " + std::to_string(f.max));
+  if (pointnet_widths.size() > static_cast<std::size_t>(kMaxNetworkLayers))
+    return bad("pointnet_widths holds " + std::to_string(pointnet_widths.size()) + " widths, at most " +
+               std::to_string(kMaxNetworkLayers) + " are allowed");
+  for (std::size_t i = 0; i < pointnet_widths.size(); ++i)
+    if (pointnet_widths[i] > kMaxNetworkWidth)
+      return bad("pointnet_widths[" + std::to_string(i) + "] (" + std::to_string(pointnet_widths[i]) +
+                 ") must be at most " + std::to_string(kMaxNetworkWidth));
   if (observation != 6)
     return bad("observation (" + std::to_string(observation) +
                ") must be 6: robot vx, vy; target x, y; target vx, vy");

@@ -38,6 +38,11 @@ const char* to_string(Variant variant);
 Variant parse_variant(const std::string& text);
 
 /// Sizes of the networks (docs/learning.md, "Sizes"); the metadata key `network` holds them as JSON.
+/// Upper bounds of NetworkConfig's sizes (validate() refuses larger ones).
+inline constexpr int kMaxNetworkPoints = 100000;  ///< cloud_points, nearest_points (the projection's point bound)
+inline constexpr int kMaxNetworkWidth = 16384;    ///< latent, widths, features, hidden, n, m
+inline constexpr int kMaxNetworkLayers = 64;      ///< layers, PointNet widths
+
 struct NetworkConfig {
   int observation = 6;     ///< O: robot vx, vy; target x, y (relative); target vx, vy
   int cloud_points = 200;  ///< C: perception's cloud_size
