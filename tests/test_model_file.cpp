@@ -117,3 +117,37 @@ TEST(ModelFile, ThePolicyFoldsAFileOnlyAsChecked) {
   m.tensors.erase("decoder.fc1.weight");
   EXPECT_THROW(policy::Model{m}, io::InputError);
 }
+
+TEST(ModelFile, ValuesFromTheFileAreWrittenOutInMessages) {
+  // A NUL in a metadata value would end the message at what() (the CLI prints only that far).
+  const projection::Settings p;
+  io::TensorFile file = policy::random_model(io::NetworkConfig::for_projection(p), p, "cvae", 5);
+  file.source = "m.safetensors";
+  file.metadata["variant"] = std::string("cv\0ae", 5);
+  try {
+    io::validate_model_file(file);
+    FAIL() << "accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("variant is 'cv\\x00ae'"), std::string::npos) << e.what();
+  }
+  file.metadata["variant"] = "cvae";
+  file.metadata["format"] = std::string("occtrack\0model", 14);
+  try {
+    io::validate_model_file(file);
+    FAIL() << "accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("format is 'occtrack\\x00model'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ModelFile, SizesBeyondTheBoundsAreRefusedBeforeAnyWorkspace) {
+  io::NetworkConfig c;
+  c.cloud_points = 1000000000;  // once reserved 8 GB of PointNet workspace (fuzz_model_file)
+  std::string error;
+  EXPECT_FALSE(c.validate(&error));
+  EXPECT_EQ(error, "cloud_points (1000000000) must be at most 100000");
+  c = {};
+  c.pointnet_widths.assign(65, 8);
+  EXPECT_FALSE(c.validate(&error));
+  EXPECT_NE(error.find("pointnet_widths holds 65 widths"), std::string::npos) << error;
+}

@@ -44,7 +44,7 @@ json parse_meta_object(const std::string& source, const std::string& key, const 
     if (!value.is_object()) fail(source, "metadata '" + key + "' is not a JSON object");
     return value;
   } catch (const json::exception& e) {
-    fail(source, "metadata '" + key + "' is not valid JSON (" + e.what() + ")");
+    fail(source, "metadata '" + key + "' is not valid JSON (" + detail::printable(e.what()) + ")");
   }
 }
 
@@ -150,7 +150,7 @@ DatasetFile validate_dataset_file(const TensorFile& file) {
   const std::string& source = d.source;
   const std::string& format = require_meta(file, source, "format");
   if (format != kDatasetFormat)
-    fail(source, "metadata 'format' is '" + format + "', expected '" + kDatasetFormat + "'");
+    fail(source, "metadata 'format' is '" + detail::printable(format) + "', expected '" + kDatasetFormat + "'");
   d.metadata = file.metadata;
   require_meta(file, source, "projection");
   d.coefficients = dataset_projection(d).coefficients();
@@ -252,7 +252,7 @@ DatasetStatistics dataset_statistics(const DatasetFile& d) {
   try {
     basis = core::bernstein_basis(degree, steps, horizon);
   } catch (const std::invalid_argument& e) {
-    fail(source, std::string("metadata 'projection': ") + e.what());
+    fail(source, std::string("metadata 'projection': ") + detail::printable(e.what()));
   }
   const int n = d.coefficients;
   const int first_steps = std::max(1, std::min(steps - 1, static_cast<int>(std::lround(0.1 / horizon * (steps - 1)))));

@@ -28,7 +28,7 @@ json parse_metadata_json(const std::string& text, const std::string& source, con
   try {
     return json::parse(text);
   } catch (const json::exception& e) {
-    fail(source, "metadata " + key + " is not valid JSON (" + e.what() + ")");
+    fail(source, "metadata " + key + " is not valid JSON (" + detail::printable(e.what()) + ")");
   }
 }
 
@@ -105,7 +105,7 @@ Variant parse_variant(const std::string& text) {
   if (text == "cvae") return Variant::cvae;
   if (text == "bc") return Variant::bc;
   if (text == "fixed-q") return Variant::fixed_q;
-  throw InputError("variant '" + text + "' is not one of cvae, bc, fixed-q");
+  throw InputError("variant '" + detail::printable(text) + "' is not one of cvae, bc, fixed-q");
 }
 
 NetworkConfig NetworkConfig::for_projection(const projection::Settings& settings) {
@@ -316,10 +316,10 @@ ModelFile validate_model_file(const TensorFile& file) {
   // Metadata: format, variant, sizes, the optimizer trained through, the band.
   const std::string& format = meta("format");
   if (format != kModelFormat)
-    fail(source, "metadata format is '" + format + "', expected '" + std::string(kModelFormat) + "'");
+    fail(source, "metadata format is '" + detail::printable(format) + "', expected '" + std::string(kModelFormat) + "'");
   const std::string& variant = meta("variant");
   if (variant != "cvae" && variant != "bc" && variant != "fixed-q")
-    fail(source, "metadata variant is '" + variant + "', expected one of cvae, bc, fixed-q");
+    fail(source, "metadata variant is '" + detail::printable(variant) + "', expected one of cvae, bc, fixed-q");
   m.variant = parse_variant(variant);
   m.network = NetworkConfig::parse(meta("network"), source);
   m.projection = parse_projection_settings(meta("projection"), source, "projection", /*strict=*/false);
