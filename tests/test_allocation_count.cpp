@@ -182,10 +182,10 @@ TEST(AllocationCount, PerceptionProcessDoesNotAllocateAfterTheFirstScan) {
 
 namespace {
 
+// The shipped models are part of the repository: a missing one is an error (Model::load throws), not a skip.
 std::unique_ptr<policy::Model> shipped_model(const char* variant) {
-  const std::string path = std::string(OCCTRACK_MODEL_DIR) + "/" + variant + ".safetensors";
-  if (!std::filesystem::exists(path)) return nullptr;
-  return std::make_unique<policy::Model>(policy::Model::load(path));
+  return std::make_unique<policy::Model>(
+      policy::Model::load(std::string(OCCTRACK_MODEL_DIR) + "/" + variant + ".safetensors"));
 }
 
 // The clouds and observations of a recording, as the learned planner hands them to the networks.
@@ -217,7 +217,6 @@ NetworkInputs network_inputs(const Recording& recording, int cloud_size) {
 
 TEST(AllocationCount, ModelFeaturesAndDecodeDoNotAllocateWithinTheReservedSizes) {
   std::unique_ptr<policy::Model> model = shipped_model("cvae");
-  if (!model) GTEST_SKIP() << "no shipped model in " OCCTRACK_MODEL_DIR;
   const policy::NetworkConfig& net = model->network();
   const int batch = 30;
   model->reserve(batch, net.cloud_points);
@@ -257,7 +256,6 @@ TEST(AllocationCount, ModelFeaturesAndDecodeDoNotAllocateWithinTheReservedSizes)
 // count sees the networks' allocations.
 TEST(AllocationCount, ModelWorkspacesGrowOncePastTheReserve) {
   std::unique_ptr<policy::Model> model = shipped_model("cvae");
-  if (!model) GTEST_SKIP() << "no shipped model in " OCCTRACK_MODEL_DIR;
   const policy::NetworkConfig& net = model->network();
   const int batch = 45, points = net.cloud_points + 50;  // the constructor reserved 30 and cloud_points
   const policy::Cloud cloud = policy::Cloud::Random(points, 2) * 4.0f;
@@ -315,7 +313,7 @@ TEST(AllocationCount, LearnedPlanDoesNotAllocateAfterTheFirstCycle) {
     planners::PlannerOptions options;
     options.model = std::string(OCCTRACK_MODEL_DIR) + "/" +
                     (std::string(variant) == "cvae-fixed-q" ? "fixed-q" : variant) + ".safetensors";
-    if (!std::filesystem::exists(options.model)) GTEST_SKIP() << "no shipped model " << options.model;
+    ASSERT_TRUE(std::filesystem::exists(options.model)) << "no shipped model " << options.model;
     std::unique_ptr<planners::Planner> planner = planners::make_planner(variant, options);
     EXPECT_EQ(planner_allocations(*planner), "") << variant;
   }

@@ -88,12 +88,6 @@ Eigen::Vector2d Context::goal(const Frame& frame) const {
   return future * std::max(0.0, 1.0 - ranking_settings_.band.reference / distance);
 }
 
-Eigen::RowVectorXd Context::straight_line(const Eigen::Vector2d& end) const {
-  Eigen::RowVectorXd xi(2 * projection_.coefficients());
-  line_through(end, xi);
-  return xi;
-}
-
 void Context::line_to_goal(const Frame& frame, Eigen::RowVectorXd& out) const { line_through(goal(frame), out); }
 
 void Context::line_through(const Eigen::Vector2d& end, Eigen::RowVectorXd& xi) const {

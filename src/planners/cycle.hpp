@@ -80,9 +80,8 @@ class Context {
   /// Where the naive follower heads: the target's predicted position at the horizon's end, pulled back
   /// towards the robot to the reference distance.
   Eigen::Vector2d goal(const Frame& frame) const;
-  /// Coefficients (x then y) of a straight line from the origin to `end` at constant velocity (allocates).
-  Eigen::RowVectorXd straight_line(const Eigen::Vector2d& end) const;
-  /// The same into `xi` (resized to 2n).
+  /// Coefficients (x then y) of a straight line from the origin to `end` at constant velocity, into `xi`
+  /// (resized to 2n).
   void line_through(const Eigen::Vector2d& end, Eigen::RowVectorXd& xi) const;
 
   /// Fills problem row b with the nominal q for nominal coefficients xi_bar: terminal state and via points
@@ -98,7 +97,7 @@ class Context {
   /// Least-squares coefficients of a previous plan shifted by dt seconds and by `offset` metres (its frame's
   /// origin minus the new one), so that it can seed the next cycle; into `out` (2n).
   void shift(const Eigen::RowVectorXd& xi, double dt, const Eigen::Vector2d& offset, Eigen::RowVectorXd& out) const;
-  /// Straight line to the goal, into `out` (2n): straight_line(goal(frame)).
+  /// Straight line to the goal, into `out` (2n): line_through(goal(frame), out).
   void line_to_goal(const Frame& frame, Eigen::RowVectorXd& out) const;
 
   const projection::Settings& projection() const { return projection_; }
