@@ -31,6 +31,12 @@ struct EpisodeMetrics {
   double target_out_of_range_s = 0;  ///< target beyond the sensor's range
   int planner_failures = 0;          ///< cycles in which the planner returned no usable plan (the robot braked)
   int cycles = 0;
+  // Protocol v2 (shared/spec/simulation.md): the run's latency (0 with latency none), the compute scale it
+  // stands for, and how the lost sight was spread: separate spells and the longest one.
+  double latency_ms = 0;
+  double compute_scale = 1;
+  int occlusion_stretches = 0;
+  double longest_occlusion_s = 0;
 };
 
 /// A suite's episodes and their summary (sim::summarize_suite makes it, io/results.hpp writes it).

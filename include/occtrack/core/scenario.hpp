@@ -34,6 +34,7 @@ struct SensorSpec {
   int beams = 720;       ///< Evenly over 360 degrees, starting at angle 0 (+x).
   double range = 10.0;   ///< Metres; no return beyond.
   double noise = 0.0;    ///< Standard deviation of additive range noise, metres.
+  double dropout = 0.0;  ///< Probability that a beam returns nothing (Protocol v2), in [0, 1].
 };
 
 struct Scenario {

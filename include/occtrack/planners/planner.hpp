@@ -24,6 +24,10 @@ struct PlannerInput {
   Vec2 robot_velocity = Vec2::Zero();
   Vec2 target_position = Vec2::Zero();  ///< world frame, current estimate
   Vec2 target_velocity = Vec2::Zero();
+  /// Seconds since the target estimate above was measured (Protocol v2, target_observation line_of_sight):
+  /// 0 for a current estimate; while the target is hidden, the last estimate and its age; +infinity when the
+  /// target has never been observed (the position and velocity then mean nothing and a planner holds still).
+  double target_age = 0.0;
   const core::Scan* scan = nullptr;     ///< the latest scan; must not be null
 };
 
@@ -70,6 +74,11 @@ class Planner {
   virtual std::string name() const = 0;
   /// Forget everything from previous calls (warm starts, velocity estimates); called at episode start.
   virtual void reset() = 0;
+  /// Prior knowledge of the world, for the baselines that plan on a prior map (AutoChaser: the scenario's
+  /// static obstacles and, when asked, the target's true future path). This is the one documented exception
+  /// to "planners see only the scan" (shared/spec/simulation.md); sim::run_episode calls it before reset().
+  /// Every other planner ignores it.
+  virtual void use_prior(const core::Scenario& /*scenario*/) {}
   /// One planning cycle into `out`, whose storage is reused: given the same `out` every cycle, the planners
   /// of this library allocate nothing after the first cycles (tests/test_allocation_count.cpp). Never throws
   /// for bad sensor data and never leaves a non-finite command.
@@ -94,6 +103,7 @@ struct PlannerOptions {
   int batch = 30;           ///< learned planners: samples drawn per cycle (30; 5 for constrained hardware)
   bool keep_last_plan = true;  ///< learned planners: also rank the last plan, shifted (LearnedPolicySettings)
   bool rank_stop = true;       ///< learned planners: also rank a plan that stops (LearnedPolicySettings)
+  int waypoints = 0;  ///< AutoChaser: true future target points given as prior (0: constant-velocity prediction)
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".
