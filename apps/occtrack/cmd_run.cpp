@@ -25,7 +25,8 @@ constexpr const char* kWho = "occtrack run";
 int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
   auto planner = planners::make_planner(o.episode.planner, o.episode.planner_options);
-  const sim::EpisodeSettings settings = o.episode.settings();
+  // --latency auto is measured here, once, before the episode (Protocol v2).
+  const sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
   Progress progress(scenario.name + " (" + planner->name() + ")");
   const sim::EpisodeResult result =
       sim::run_episode(scenario, *planner, settings, [&](double f) { progress.update(f); });
@@ -38,6 +39,9 @@ int run(const RunOptions& o) {
               m.acceleration.max);
   std::printf("  compute          median %.2f, p99 %.2f, max %.2f ms per cycle (%d cycles, %d failed)\n",
               m.compute_ms.median, m.compute_ms.p99, m.compute_ms.max, m.cycles, m.planner_failures);
+  if (m.latency_ms > 0.0 || m.occlusion_stretches > 0)
+    std::printf("  latency          %.1f ms (compute scale %g); %d spells of lost sight, the longest %.2f s\n",
+                m.latency_ms, m.compute_scale, m.occlusion_stretches, m.longest_occlusion_s);
   std::printf("  tracking         mean distance %.2f m, %.0f%% of the time in [%.1f, %.1f] m; target out of range "
               "%.1f s\n",
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,

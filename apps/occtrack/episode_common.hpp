@@ -1,17 +1,98 @@
-// Pieces shared by `occtrack run` and `occtrack bench suite`: planner options on the command line, and a
-// progress line on standard error.
+// Pieces shared by `occtrack run` and `occtrack bench suite`: planner and episode options on the command line
+// (Protocol v2's among them, shared/spec/simulation.md), the resolution of `--latency auto`, and a progress
+// line on standard error.
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 #include "cli_support.hpp"
+#include "occtrack/core/scenario.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/sim/episode.hpp"
 
 namespace occtrack::app {
+
+namespace episode_cli {
+
+/// A number as a message shows it: "1.5", "0", "1e-06".
+inline std::string show(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
+
+/// `text` as a finite number (the whole text; no NaN, no infinity), else nullopt.
+inline std::optional<double> number(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(x)) return std::nullopt;
+  return x;
+}
+
+/// The rule a value breaks ("must be in [0, 1], got 1.5"), empty when `text` is a number in [low, high]
+/// (`low_open`: > low). The option's name is put in front by CLI11 ("--beam-dropout: ...") or by value().
+inline std::string check(const std::string& text, double low, double high, bool low_open = false) {
+  const std::optional<double> x = number(text);
+  const bool ok = x && (low_open ? *x > low : *x >= low) && *x <= high;
+  if (ok) return "";
+  std::string rule;
+  if (std::isinf(high))
+    rule = std::string("must be a number ") + (low_open ? "> " : ">= ") + show(low);
+  else
+    rule = "must be in [" + show(low) + ", " + show(high) + "]";
+  return rule + ", got " + text;
+}
+
+/// An integer >= low, else the rule.
+inline std::string check_integer(const std::string& text, long low) {
+  char* end = nullptr;
+  const long x = text.empty() ? 0 : std::strtol(text.c_str(), &end, 10);
+  if (!text.empty() && end == text.c_str() + text.size() && x >= low && x < (1L << 30)) return "";
+  return "must be an integer >= " + std::to_string(low) + ", got " + text;
+}
+
+inline std::string check_latency(const std::string& text) {
+  if (text == "none" || text == "auto" || check(text, 0.0, INFINITY).empty()) return "";
+  return "must be none, auto or a number of milliseconds >= 0, got " + text;
+}
+
+/// "POS,VEL" as two numbers >= 0.
+inline std::optional<std::pair<double, double>> noise_pair(const std::string& text) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos) return std::nullopt;
+  const std::string a = text.substr(0, comma), b = text.substr(comma + 1);
+  if (!check(a, 0.0, INFINITY).empty() || !check(b, 0.0, INFINITY).empty()) return std::nullopt;
+  return std::make_pair(*number(a), *number(b));
+}
+
+inline std::string check_noise_pair(const std::string& text) {
+  return noise_pair(text) ? "" : "must be POS,VEL: two numbers >= 0 (m, m/s), got " + text;
+}
+
+/// A CLI11 check from one of the functions above.
+inline CLI::Validator validator(std::function<std::string(const std::string&)> rule, const std::string& what) {
+  return CLI::Validator([rule = std::move(rule)](std::string& text) { return rule(text); }, what);
+}
+
+/// The value of a checked option; throws std::invalid_argument("--name: rule") when it breaks its rule (the
+/// options may be set by code rather than parsed).
+inline double value(const std::string& name, const std::string& text, const std::string& rule) {
+  if (!rule.empty()) throw std::invalid_argument(name + ": " + rule);
+  return *number(text);
+}
+
+}  // namespace episode_cli
 
 struct EpisodeCliOptions {
   std::string planner = "projcem";
@@ -19,16 +100,59 @@ struct EpisodeCliOptions {
   bool delay = false;
   std::uint64_t sensor_seed = 1;
 
-  /// The episode's settings these options choose (the rest at their defaults).
+  // Protocol v2 (shared/spec/simulation.md). Kept as text as typed (empty: the scenario's own value) and
+  // checked when parsed; the defaults are v1.
+  std::string latency = "none";  ///< none | auto | milliseconds
+  double compute_scale = 1.0;
+  double tau = 0.0;
+  std::string beams, lidar_noise, beam_dropout;  ///< overrides of the scenario's sensor; empty: none
+  std::string target_noise;                      ///< "POS,VEL"; empty: 0,0
+  std::string target_observation = "always";
+
+  bool latency_auto() const { return latency == "auto"; }
+
+  /// The episode's settings these options choose (the rest at their defaults). Throws std::invalid_argument
+  /// naming the option for a bad value, and for `--latency auto`, which only resolve_episode_settings() can
+  /// turn into a number.
   sim::EpisodeSettings settings() const {
+    namespace e = episode_cli;
     sim::EpisodeSettings s;
     s.delay_by_compute = delay;
     s.seed = sensor_seed;
+    if (latency_auto())
+      throw std::invalid_argument("--latency auto: must be resolved by measuring the planner first "
+                                  "(resolve_episode_settings)");
+    if (latency != "none") s.latency_ms = e::value("--latency", latency, e::check_latency(latency));
+    if (!(std::isfinite(compute_scale) && compute_scale > 0.0))
+      throw std::invalid_argument("--compute-scale: must be a number > 0, got " + e::show(compute_scale));
+    s.compute_scale = compute_scale;
+    if (!(std::isfinite(tau) && tau >= 0.0)) throw std::invalid_argument("--tau: must be a number >= 0, got " + e::show(tau));
+    s.tau = tau;
+    if (!beams.empty()) {
+      const std::string rule = e::check_integer(beams, 1);
+      if (!rule.empty()) throw std::invalid_argument("--beams: " + rule);
+      s.beams = std::atoi(beams.c_str());
+    }
+    if (!lidar_noise.empty()) s.lidar_noise = e::value("--lidar-noise", lidar_noise, e::check(lidar_noise, 0.0, INFINITY));
+    if (!beam_dropout.empty()) s.beam_dropout = e::value("--beam-dropout", beam_dropout, e::check(beam_dropout, 0.0, 1.0));
+    if (!target_noise.empty()) {
+      const auto pair = e::noise_pair(target_noise);
+      if (!pair) throw std::invalid_argument("--target-noise: " + e::check_noise_pair(target_noise));
+      s.target_position_noise = pair->first;
+      s.target_velocity_noise = pair->second;
+    }
+    if (target_observation == "always")
+      s.target_observation = sim::TargetObservation::always;
+    else if (target_observation == "line_of_sight")
+      s.target_observation = sim::TargetObservation::line_of_sight;
+    else
+      throw std::invalid_argument("--target-observation: must be always or line_of_sight, got " + target_observation);
     return s;
   }
 };
 
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
+  namespace e = episode_cli;
   std::string names;
   for (const auto& n : planners::planner_names()) names += (names.empty() ? "" : ", ") + n;
   cmd->add_option("--planner", o.planner, "Planner: " + names)->capture_default_str();
@@ -45,7 +169,61 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                 "Learned planners: rank only the B samples, not also the last plan shifted to now (the paper's policy)");
   cmd->add_flag("--no-stop{false}", o.planner_options.rank_stop,
                 "Learned planners: do not rank the stop plan besides the samples (the paper's policy has none)");
+  cmd->add_option("--waypoints", o.planner_options.waypoints,
+                  "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
+      ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))
+      ->capture_default_str();
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
+
+  // Protocol v2 (shared/spec/simulation.md, "Protocol v2").
+  cmd->add_option("--latency", o.latency,
+                  "Command latency: none (v1), a number of ms, or auto (the planner's median cycle on replayed "
+                  "scans, measured before the run, times --compute-scale); the next cycle starts once the "
+                  "command applies")
+      ->check(e::validator(e::check_latency, "none|auto|MS"))
+      ->capture_default_str();
+  cmd->add_option("--compute-scale", o.compute_scale,
+                  "Stands for a computer this many times slower (scales --latency auto; recorded)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY, true); }, "F > 0"))
+      ->capture_default_str();
+  cmd->add_option("--tau", o.tau, "Seconds: first-order lag of the robot's velocity behind the command (0: none)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"))
+      ->capture_default_str();
+  cmd->add_option("--beams", o.beams, "LiDAR beams over 360 degrees (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check_integer(t, 1); }, "N >= 1"));
+  cmd->add_option("--lidar-noise", o.lidar_noise, "LiDAR range noise, standard deviation in m (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "SIGMA >= 0"));
+  cmd->add_option("--beam-dropout", o.beam_dropout,
+                  "Probability that a LiDAR beam returns nothing (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1.0); }, "P in [0, 1]"));
+  cmd->add_option("--target-noise", o.target_noise,
+                  "Gaussian noise on the target estimate the planner receives: position (m), velocity (m/s)")
+      ->check(e::validator(e::check_noise_pair, "POS,VEL"));
+  add_choice_option(cmd, "--target-observation", o.target_observation,
+                    "always (v1), or line_of_sight: a fresh target estimate only while it is visible and in range, "
+                    "else the last one and its age",
+                    {"always", "line_of_sight"});
+}
+
+/// The episode settings of `o`, with `--latency auto` resolved: the planner that `make` builds (by default
+/// the one the options name) is timed once on scans replayed from `scenarios` (sim::median_cycle_ms), the
+/// median is multiplied by --compute-scale, the result is printed on standard error and held fixed for the
+/// whole run. Without `auto` this is o.settings() and nothing is measured. Throws std::invalid_argument naming
+/// the option for a bad value.
+inline sim::EpisodeSettings resolve_episode_settings(
+    const EpisodeCliOptions& o, const std::vector<core::Scenario>& scenarios,
+    const std::function<std::unique_ptr<planners::Planner>()>& make = {}) {
+  if (!o.latency_auto()) return o.settings();
+  EpisodeCliOptions fixed = o;
+  fixed.latency = "0";
+  sim::EpisodeSettings s = fixed.settings();
+  if (scenarios.empty()) throw std::invalid_argument("--latency auto: no scenarios to measure the planner on");
+  std::unique_ptr<planners::Planner> planner = make ? make() : planners::make_planner(o.planner, o.planner_options);
+  const double median = sim::median_cycle_ms(*planner, scenarios, s);
+  s.latency_ms = median * s.compute_scale;
+  std::fprintf(stderr, "latency auto: %.9g ms (median cycle %.9g ms x compute scale %g)\n", *s.latency_ms, median,
+               s.compute_scale);
+  return s;
 }
 
 /// A progress line that rewrites itself on a terminal, and prints every 25% otherwise (logs stay short).

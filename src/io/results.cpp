@@ -34,6 +34,11 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
   j["target_out_of_range_s"] = m.target_out_of_range_s;
   j["planner_failures"] = m.planner_failures;
   j["cycles"] = m.cycles;
+  // Protocol v2 (shared/spec/simulation.md, "Suites v2"): 0 and 1 for a v1 run.
+  j["latency_ms"] = m.latency_ms;
+  j["compute_scale"] = m.compute_scale;
+  j["occlusion_stretches"] = m.occlusion_stretches;
+  j["longest_occlusion_s"] = m.longest_occlusion_s;
   return j;
 }
 

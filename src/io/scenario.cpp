@@ -307,7 +307,7 @@ core::Scenario read_document(const YamlReader& r, const YAML::Node& root) {
   }
 
   if (const YAML::Node sensor = r.optional(root, "", "sensor"); sensor.IsDefined()) {
-    r.only_keys(sensor, "sensor", {"beams", "range", "noise"});
+    r.only_keys(sensor, "sensor", {"beams", "range", "noise", "dropout"});
     if (const YAML::Node beams = r.optional(sensor, "sensor", "beams"); beams.IsDefined()) {
       const long long count = r.integer(beams, "sensor.beams");
       if (count < 1) r.fail("sensor.beams", "must be at least 1, got " + std::to_string(count), beams);
@@ -320,6 +320,12 @@ core::Scenario read_document(const YamlReader& r, const YAML::Node& root) {
       scenario.sensor.range = r.positive(range, "sensor.range");
     if (const YAML::Node noise = r.optional(sensor, "sensor", "noise"); noise.IsDefined())
       scenario.sensor.noise = r.non_negative(noise, "sensor.noise");
+    // Protocol v2: the probability that a beam returns nothing.
+    if (const YAML::Node dropout = r.optional(sensor, "sensor", "dropout"); dropout.IsDefined()) {
+      scenario.sensor.dropout = r.non_negative(dropout, "sensor.dropout");
+      if (scenario.sensor.dropout > 1.0)
+        r.fail("sensor.dropout", "must be in [0, 1], got " + format_number(scenario.sensor.dropout), dropout);
+    }
   }
 
   // The robot's disk must start clear of every obstacle (touching is allowed).
@@ -449,7 +455,9 @@ std::string scenario_yaml(const core::Scenario& s) {
     out << "    - [" << format_number(w.time) << ", " << format_number(w.position.x()) << ", "
         << format_number(w.position.y()) << "]\n";
   out << "sensor: {beams: " << s.sensor.beams << ", range: " << format_number(s.sensor.range)
-      << ", noise: " << format_number(s.sensor.noise) << "}\n";
+      << ", noise: " << format_number(s.sensor.noise);
+  if (s.sensor.dropout != 0.0) out << ", dropout: " << format_number(s.sensor.dropout);  // v1 files stay as they were
+  out << "}\n";
   return out.str();
 }
 

@@ -36,6 +36,18 @@ void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, cons
   finish(out, clock);
 }
 
+bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& record, const CycleClock& clock) {
+  if (!std::isinf(input.target_age)) return false;
+  out.ok = true;
+  out.message = "target not observed yet: holding still";
+  out.command_velocity.setZero();
+  out.plan.clear();
+  out.candidates.clear();
+  record.valid = false;
+  finish(out, clock);
+  return true;
+}
+
 Context::Context(const projection::Settings& projection, const perception::Settings& perception,
                  const RankingSettings& ranking)
     : projection_(projection), ranking_settings_(ranking), perception_(perception), ranking_(ranking, projection) {
@@ -61,12 +73,16 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
     return fail("planner input: robot state is not finite");
   if (!input.target_position.allFinite() || !input.target_velocity.allFinite())
     return fail("planner input: target state is not finite");
+  if (!(input.target_age >= 0.0)) return fail("planner input: target age is negative or not a number");
   if (!perception_.process(*input.scan, input.robot_position, observation_, error)) return false;
 
   frame.time = input.time;
   frame.origin = input.robot_position;
   frame.robot_velocity = input.robot_velocity;
   frame.target << input.target_position - input.robot_position, input.target_velocity;
+  // A hidden target's last estimate, carried forward at constant velocity (the v1 case, age 0, is untouched).
+  if (input.target_age > 0.0)
+    frame.target.head<2>() += input.target_velocity * std::min(input.target_age, kMaxTargetPrediction);
   frame.nearest = observation_.nearest;
   frame.cloud = observation_.cloud;
   frame.scan = input.scan;

@@ -3,6 +3,7 @@
 // between coefficients, commands and the world frame, braking, and the cycle's timing.
 //
 //   detail::CycleClock clock;                                   // at the top of plan()
+//   if (detail::hold_unobserved(input, out, record, clock)) return;  // target never seen: stand still
 //   if (!context.observe(input, record.frame, &error)) return detail::brake(out, record, clock, name() + ": " + error);
 //   ...
 //   context.finish_plan(out, record, clock, xi, terms);         // command, world plan, record, timing
@@ -60,6 +61,15 @@ void finish(PlannerOutput& out, const CycleClock& clock);
 /// `message`, the record invalidated, and finish().
 void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, const std::string& message);
 
+/// Protocol v2: a target never observed (input.target_age +infinity) leaves nothing to track. Then the cycle
+/// commands zero velocity (the robot brakes to a stop under its acceleration bound), ok = true with a message
+/// saying why, and returns true; the planner returns at once. False otherwise (nothing is touched).
+bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& record, const CycleClock& clock);
+
+/// The longest extrapolation of a hidden target's last estimate (s): beyond it, a constant-velocity guess is
+/// worth less than the last place it was seen heading from (docs/protocol_v2.md).
+constexpr double kMaxTargetPrediction = 2.0;
+
 class Context {
  public:
   Context(const projection::Settings& projection, const perception::Settings& perception,
@@ -68,7 +78,9 @@ class Context {
   /// Forgets perception's tracks (velocity estimates); called when an episode starts.
   void reset() { perception_.reset(); }
 
-  /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state).
+  /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state, a
+  /// negative or NaN target age). A target estimate of age a > 0 (hidden target, Protocol v2) is predicted at
+  /// constant velocity over min(a, kMaxTargetPrediction); the planners plan on that prediction.
   bool observe(const PlannerInput& input, Frame& frame, std::string* error);
 
   /// The end of a cycle that chose `xi` (robot-centric in record.frame) with ranking `terms`: out's command

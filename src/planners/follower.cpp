@@ -37,6 +37,7 @@ void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
   auto& s = *impl_;
   Frame& frame = s.record.frame;
   std::string error;
+  if (detail::hold_unobserved(input, out, s.record, clock)) return;
   if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
   s.context.line_to_goal(frame, s.line);
   const Eigen::Vector2d terminal_velocity = frame.target.tail<2>();

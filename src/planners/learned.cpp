@@ -217,7 +217,12 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
     s.timing.total = out.compute_ms;
   };
 
-  // 1. Observation (robot-centric).
+  // 1. Observation (robot-centric). A target never observed: stand still, and no stale plan to warm-start from.
+  if (detail::hold_unobserved(input, out, s.record, clock)) {
+    s.has_last = false;
+    s.timing.total = out.compute_ms;
+    return;
+  }
   if (!s.context.observe(input, s.record.frame, &error)) return brake(error);
   const auto observed = Clock::now();
   s.timing.perception = ms_between(start, observed);

@@ -90,6 +90,7 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
   const auto& cfg = s.settings;
   Frame& frame = s.record.frame;
   std::string error;
+  if (detail::hold_unobserved(input, out, s.record, clock)) return;
   if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
   const int n = cfg.projection.coefficients(), B = cfg.samples;
   s.context.line_to_goal(frame, s.line);

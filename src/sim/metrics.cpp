@@ -26,6 +26,16 @@ void EpisodeMetricsAccumulator::add_state(double clearance, bool occluded, doubl
     ++steps_;
     if (colliding) m_.collision_time_s += physics_step_;
     if (occluded) m_.occlusion_time_s += physics_step_;
+    // Spells of lost sight (Protocol v2): a new one begins at each step blocked after one that was not.
+    if (occluded) {
+      if (!in_occlusion_) {
+        ++m_.occlusion_stretches;
+        occlusion_spell_ = 0;
+      }
+      occlusion_spell_ += physics_step_;
+      m_.longest_occlusion_s = std::max(m_.longest_occlusion_s, occlusion_spell_);
+    }
+    in_occlusion_ = occluded;
     if (distance > sensor_range_) m_.target_out_of_range_s += physics_step_;
     distance_sum_ += distance;
     in_band_ += distance >= band_.min && distance <= band_.max;
@@ -69,6 +79,8 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
   s.scenario = suite;
   s.planner = planner;
   if (episodes.empty()) return r;
+  s.latency_ms = episodes.front().latency_ms;
+  s.compute_scale = episodes.front().compute_scale;
   s.min_clearance_m = std::numeric_limits<double>::infinity();
   s.acceleration.min = std::numeric_limits<double>::infinity();
   std::vector<double> medians;
@@ -92,6 +104,8 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
     s.target_out_of_range_s += e.target_out_of_range_s;
     s.planner_failures += e.planner_failures;
     s.cycles += e.cycles;
+    s.occlusion_stretches += e.occlusion_stretches;
+    s.longest_occlusion_s = std::max(s.longest_occlusion_s, e.longest_occlusion_s);
     successes += e.success;
   }
   const double total = std::max(s.duration_s, 1e-12);

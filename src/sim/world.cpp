@@ -56,6 +56,7 @@ void check_scenario(const core::Scenario& s) {
   if (s.sensor.beams < 1) invalid("sensor.beams", "must be at least 1");
   if (!(std::isfinite(s.sensor.range) && s.sensor.range > 0.0)) invalid("sensor.range", "must be positive");
   if (!(std::isfinite(s.sensor.noise) && s.sensor.noise >= 0.0)) invalid("sensor.noise", "must be >= 0");
+  if (!(s.sensor.dropout >= 0.0 && s.sensor.dropout <= 1.0)) invalid("sensor.dropout", "must be in [0, 1]");
 }
 
 }  // namespace
@@ -196,6 +197,15 @@ void World::scan(const Vec2& position, double t, std::mt19937_64& rng, core::Sca
     std::normal_distribution<double> gaussian(0.0, noise);
     for (double& r : out.ranges)
       if (std::isfinite(r)) r = std::max(0.0, r + gaussian(rng));
+  }
+
+  // Dropout (Protocol v2): a dropped beam returns nothing. One draw per beam whatever it hit, so that the
+  // stream's position depends only on the number of scans.
+  const double dropout = scenario_.sensor.dropout;
+  if (dropout > 0.0) {
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (double& r : out.ranges)
+      if (uniform(dropout_rng_) < dropout) r = kInfinity;
   }
 }
 

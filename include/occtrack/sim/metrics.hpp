@@ -39,12 +39,16 @@ class EpisodeMetricsAccumulator {
   core::TrackingBand band_;
   int steps_ = 0;  // states that span a step
   bool in_collision_ = false;
+  bool in_occlusion_ = false;   // the previous step's line of sight was blocked
+  double occlusion_spell_ = 0;  // s, length of the current spell of lost sight
   double acceleration_sum_ = 0.0, distance_sum_ = 0.0;
   int in_band_ = 0;
   std::vector<double> compute_ms_;
 };
 
-/// A suite's summary over its episodes (see core::SuiteResult for how each metric is combined).
+/// A suite's summary over its episodes (see core::SuiteResult for how each metric is combined; Protocol v2's:
+/// occlusion stretches summed, the longest the longest of any episode, latency and compute scale those of the
+/// first episode, which all of a suite's episodes share).
 core::SuiteResult summarize_suite(const std::string& suite, const std::string& planner,
                                   const std::vector<core::EpisodeMetrics>& episodes);
 

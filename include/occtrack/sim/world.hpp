@@ -32,10 +32,15 @@ class World {
 
   /// LiDAR scan from `position` at time t: scenario().sensor.beams beams evenly over 360 degrees starting at
   /// angle 0, first hit against every shape, +infinity where nothing is hit within range; Gaussian range
-  /// noise of the sensor's standard deviation from `rng` when noise > 0.
+  /// noise of the sensor's standard deviation from `rng` when noise > 0; then, when sensor.dropout > 0, each
+  /// beam returns nothing (+infinity) with that probability, drawn from the world's own dropout stream
+  /// (seed_dropout), so that the noise draws are the same with and without dropout.
   core::Scan scan(const Vec2& position, double t, std::mt19937_64& rng);
   /// The same into `out`, reusing its storage (no allocation once `out.ranges` has the beam count).
   void scan(const Vec2& position, double t, std::mt19937_64& rng, core::Scan& out);
+
+  /// Restarts the beam-dropout random stream (one uniform draw per beam and scan, only when dropout > 0).
+  void seed_dropout(std::uint64_t seed) { dropout_rng_.seed(seed); }
 
   /// Whether the segment between two points touches any obstacle at time t (line of sight is blocked).
   bool segment_blocked(const Vec2& a, const Vec2& b, double t);
@@ -55,6 +60,7 @@ class World {
   std::vector<Vec2> box_axis_;                 // per obstacle, (cos yaw, sin yaw) (boxes; (1, 0) for circles)
   std::vector<Vec2> beam_directions_;          // unit direction of every LiDAR beam
   bool shapes_valid_ = false;                  // whether shapes_ holds shapes_time_
+  std::mt19937_64 dropout_rng_{0x64726f706f7574ULL};  // beam dropout ("dropout"), apart from the noise stream
 };
 
 }  // namespace occtrack::sim
