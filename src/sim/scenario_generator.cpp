@@ -19,6 +19,8 @@ using Checker = occtrack::detail::SettingsChecker;
 // Each world kind's name, for both directions.
 constexpr std::pair<WorldKind, const char*> kWorldKindNames[] = {
     {WorldKind::forest, "forest"}, {WorldKind::boxes, "boxes"}, {WorldKind::mixed, "mixed"}};
+constexpr std::pair<TargetMotion, const char*> kTargetMotionNames[] = {{TargetMotion::smooth, "smooth"},
+                                                                       {TargetMotion::teleop, "teleop"}};
 
 // A range [lo, hi] of positive numbers: each positive, lo <= hi.
 void positive_range(Checker& c, double lo, double hi, const char* lo_field, const char* hi_field) {
@@ -44,6 +46,12 @@ void area(Checker& c, double width, double height) {
 const char* to_string(WorldKind kind) { return occtrack::detail::name_of(kWorldKindNames, kind); }
 
 std::optional<WorldKind> parse_world_kind(std::string_view text) { return occtrack::detail::value_of(kWorldKindNames, text); }
+
+const char* to_string(TargetMotion motion) { return occtrack::detail::name_of(kTargetMotionNames, motion); }
+
+std::optional<TargetMotion> parse_target_motion(std::string_view text) {
+  return occtrack::detail::value_of(kTargetMotionNames, text);
+}
 
 bool GeneratorSettings::validate(std::string* error) const {
   Checker c;
@@ -97,6 +105,33 @@ bool TargetSettings::validate(std::string* error) const {
   c.non_negative(sensor.noise, "sensor.noise");
   c.require(decimals >= 1 && decimals <= 12, "decimals (", decimals, ") must be between 1 and 12");
   c.require(max_backtracks >= 0, "max_backtracks (", max_backtracks, ") must not be negative");
+  c.finite(area_center_x, "area_center_x");
+  c.finite(area_center_y, "area_center_y");
+  if (motion == TargetMotion::smooth) {
+    c.require(area_center_x == 0.0 && area_center_y == 0.0, "area_center_x, area_center_y (", area_center_x, ", ",
+              area_center_y, ") must be 0 with motion smooth (its area is centred on the origin)");
+  } else {
+    c.require(waypoint_period <= 0.1, "waypoint_period (", waypoint_period,
+              ") must be at most 0.1 s with motion teleop");
+    const TeleopStyle& s = teleop;
+    positive_range(c, s.command_period_min, s.command_period_max, "teleop.command_period_min",
+                   "teleop.command_period_max");
+    c.share(s.forward_mean, "teleop.forward_mean");
+    c.non_negative(s.forward_noise, "teleop.forward_noise");
+    c.positive(s.forward_time, "teleop.forward_time");
+    c.non_negative(s.yaw_gain, "teleop.yaw_gain");
+    c.non_negative(s.yaw_noise, "teleop.yaw_noise");
+    c.positive(s.yaw_noise_time, "teleop.yaw_noise_time");
+    c.positive(s.yaw_rate_max, "teleop.yaw_rate_max");
+    c.share(s.strafe_share, "teleop.strafe_share");
+    c.require(s.strafe_share < 1.0, "teleop.strafe_share (", s.strafe_share, ") must be less than 1");
+    positive_range(c, s.strafe_min, s.strafe_max, "teleop.strafe_min", "teleop.strafe_max");
+    positive_range(c, s.strafe_speed_min, s.strafe_speed_max, "teleop.strafe_speed_min", "teleop.strafe_speed_max");
+    c.share(s.stop_share, "teleop.stop_share");
+    c.require(s.stop_share < 1.0, "teleop.stop_share (", s.stop_share, ") must be less than 1");
+    positive_range(c, s.stop_min, s.stop_max, "teleop.stop_min", "teleop.stop_max");
+    positive_range(c, s.goal_gap_min, s.goal_gap_max, "teleop.goal_gap_min", "teleop.goal_gap_max");
+  }
   return c.done(error);
 }
 

@@ -23,6 +23,7 @@
 #include "../core/no_fma.hpp"
 #include "free_space.hpp"
 #include "generator_support.hpp"
+#include "teleop_path.hpp"
 #include "occtrack/sim/geometry.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 #include "occtrack/sim/world.hpp"
@@ -468,6 +469,7 @@ core::Scenario generate_episode(const core::Scenario& world, const TargetSetting
                                 const std::string& name) {
   std::string error;
   if (!target.validate(&error)) throw std::invalid_argument("generate_episode: " + error);
+  if (target.motion == TargetMotion::teleop) return generator::generate_teleop_episode(world, target, seed, name);
   EpisodeMaker maker(world, target, seed);
   return maker.make(world, name);
 }

@@ -12,6 +12,10 @@ struct TimingSummary {
   int count = 0;
 };
 
+/// The nearest-rank percentile of `sorted` (ascending, not empty): the ceil(q n)-th smallest value, the
+/// smallest for q = 0. The one percentile rule of occtrack's reports (timings here, sim/path_stats.hpp).
+double nearest_rank(const std::vector<double>& sorted, double q);
+
 /// The summary of `values` (any unit; the summary keeps it). All zero for an empty list.
 TimingSummary summarize_timings(std::vector<double> values);
 

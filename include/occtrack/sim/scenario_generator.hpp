@@ -81,8 +81,55 @@ struct GeneratorSettings {
   bool operator==(const GeneratorSettings&) const = default;
 };
 
+/// How the virtual operator drives the target.
+enum class TargetMotion {
+  smooth,  ///< smooth random motion along routes, slowing for turns (v1; src/sim/target_path.cpp)
+  teleop,  ///< joystick tele-operation: body-frame commands changing every 20-40 ms (src/sim/teleop_path.cpp)
+};
+const char* to_string(TargetMotion motion);
+/// "smooth" or "teleop"; nullopt otherwise.
+std::optional<TargetMotion> parse_target_motion(std::string_view text);
+
+/// The joystick model of TargetMotion::teleop (shared/reference/paper_setup.md, "Target motion: recorded
+/// tele-operation"). The operator holds three body-frame commands (forward, sideways, yaw rate) and changes
+/// them every command period: forward and yaw rate by mean-reverting noise plus steering towards goals that
+/// lie 1 to 2 m from an obstacle's surface (so that the target weaves between and loops around obstacles),
+/// sideways by flicking the stick (strafing), now and then a short stop. Speeds are shares of
+/// TargetSettings::max_speed, the nominal speed (full forward stick): a diagonal (forward plus sideways) goes
+/// faster than nominal, as the recorded target did (1.41 m/s at nominal 1 m/s).
+/// teleop_target_settings() below gives the values calibrated against the recordings.
+struct TeleopStyle {
+  double command_period_min = 0.02;  ///< s between command updates, drawn in [min, max]
+  double command_period_max = 0.04;
+  double forward_mean = 0.95;        ///< share of nominal the forward command reverts to
+  double forward_noise = 0.1;        ///< share of nominal, stationary standard deviation of the forward command
+  double forward_time = 2.0;         ///< s, reversion time of the forward command
+  double yaw_gain = 2.0;             ///< 1/s, yaw rate per radian of heading error towards the route
+  double yaw_noise = 0.5;            ///< rad/s, stationary standard deviation of the yaw-rate noise
+  double yaw_noise_time = 0.5;       ///< s, reversion time of the yaw-rate noise
+  double yaw_rate_max = 3.0;         ///< rad/s, largest yaw-rate command
+  double strafe_share = 0.1;         ///< share of the time spent strafing (sideways stick held)
+  double strafe_min = 0.3;           ///< s, length of a strafe, drawn in [min, max]
+  double strafe_max = 1.5;
+  double strafe_speed_min = 0.5;     ///< share of nominal, sideways speed while strafing, drawn in [min, max]
+  double strafe_speed_max = 1.0;
+  double stop_share = 0.01;          ///< share of the time standing still
+  double stop_min = 0.3;             ///< s, length of a stop, drawn in [min, max]
+  double stop_max = 1.5;
+  double goal_gap_min = 1.0;         ///< m, goals lie this far from an obstacle's surface, drawn in [min, max]
+  double goal_gap_max = 2.0;
+
+  bool operator==(const TeleopStyle&) const = default;
+};
+
 /// The target's path (a virtual tele-operator) and the robot's start.
 struct TargetSettings {
+  /// How the target moves. smooth (the default) is the v1 generator, and its files reproduce bit for bit;
+  /// teleop uses `teleop` (and max_speed as the nominal speed, static/moving clearances, area, robot and
+  /// sensor settings, max_backtracks) and needs waypoint_period <= 0.1 s, so that statistics sampled every
+  /// 0.1 s (sim/path_stats.hpp) see its abrupt changes.
+  TargetMotion motion = TargetMotion::smooth;
+  TeleopStyle teleop;
   double duration = 150.0;        ///< s, simulated time of the episode
   double waypoint_period = 0.5;   ///< s between waypoints (the path is linear between them)
   double max_speed = 1.0;         ///< m/s, never exceeded on any segment
@@ -107,6 +154,10 @@ struct TargetSettings {
   double moving_clearance = 0.1;   ///< m, gap between the target's disk and every moving obstacle, always
   double area_width = 30.0;        ///< m, the world's area (GeneratorSettings::area_width of the world)
   double area_height = 30.0;       ///< m
+  /// m, the area's centre (teleop only; the smooth generator needs an area centred on the origin, and
+  /// validate() says so): the paper's six-wall world lies around (2, 0.5).
+  double area_center_x = 0.0;
+  double area_center_y = 0.0;
   double area_margin = 1.0;        ///< m, the target's centre stays this far inside the area
 
   double robot_radius = 0.25;      ///< m
@@ -120,6 +171,12 @@ struct TargetSettings {
   bool validate(std::string* error = nullptr) const;
   bool operator==(const TargetSettings&) const = default;
 };
+
+/// Tele-operated target settings calibrated against the recordings (scenarios/README.md, "Tele-operated target
+/// motion"): motion teleop, waypoint_period 0.1 s, max_speed `nominal_speed`, and a TeleopStyle interpolated
+/// between the calm 0.5 m/s recording and the wild 1 m/s one (held beyond them). Other fields keep their
+/// defaults; set duration, area and clearances as the world needs.
+TargetSettings teleop_target_settings(double nominal_speed);
 
 /// A scenario with the world's obstacles only (no target path; name "world-<seed>", sensor defaults).
 /// Throws std::invalid_argument for invalid settings and std::runtime_error when the obstacles do not fit.

@@ -1,0 +1,569 @@
+// Tele-operated target paths (TargetMotion::teleop, include/occtrack/sim/scenario_generator.hpp): a virtual
+// person drives the target with a joystick, as in the recordings of shared/reference/paper_setup.md ("Target
+// motion: recorded tele-operation").
+//   - Commands: body-frame forward and sideways speeds (shares of the nominal speed) and a yaw rate, changed
+//     every 20-40 ms. Forward reverts to its mean with noise; sideways is flicked on for a strafe now and then;
+//     the yaw rate steers the direction of motion towards the route ahead, plus mean-reverting noise; now and
+//     then a short stop. Between command updates the body moves at constant commands.
+//   - Intentions: goals 1 to 2 m from an obstacle's surface, often the next one around the same obstacle
+//     (loops) or beside a neighbouring one (weaving), reached along shortest routes on the free-space grid
+//     (src/sim/free_space.hpp, whose area is centred on the origin: it gets the obstacles shifted by the area's
+//     centre).
+//   - Safety: each waypoint step (a segment of the written path) must keep static_clearance from static
+//     obstacles and moving_clearance from moving ones (checked along it) and stay inside the area. When a step
+//     would not, or would head into an obstacle within the next moments, the operator corrects, mildest first:
+//     ends the strafe, steers without the noise, slows, halts; when even halting fails (a moving obstacle
+//     closing in) it backs up a few steps and draws again with a new goal.
+// Determinism as in the rest of the generator (src/sim/generator_support.hpp): raw-bits random numbers, no
+// fused multiply-adds, positions rounded before they are checked.
+#include "teleop_path.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "../core/no_fma.hpp"
+#include "free_space.hpp"
+#include "generator_support.hpp"
+#include "occtrack/sim/geometry.hpp"
+#include "occtrack/sim/world.hpp"
+
+OCCTRACK_NO_FMA_CONTRACTION
+
+namespace occtrack::sim {
+
+namespace {
+
+using core::direction;
+using generator::FreeSpace;
+using generator::inside_area;
+using generator::Random;
+using generator::round_to;
+using generator::wrap_angle;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kPi = std::numbers::pi;
+
+// The operator's commands and intentions: everything a step depends on, so that a dead end can back up to
+// any earlier step.
+struct Driver {
+  Vec2 position = Vec2::Zero();  // as written (rounded)
+  double yaw = 0.0;              // rad, the body's heading
+  double forward = 0.0;          // commands: shares of the nominal speed, and rad/s
+  double sideways = 0.0;
+  double yaw_rate = 0.0;
+  double yaw_noise = 0.0;        // rad/s, the mean-reverting part of the yaw rate
+  double next_command = 0.0;     // s, times of the next command update, strafe, stop
+  double strafe_until = 0.0;
+  double next_strafe = 0.0;
+  double stop_until = 0.0;
+  double next_stop = 0.0;
+  std::shared_ptr<const std::vector<Vec2>> route;  // world coordinates, towards the goal (its last point)
+  std::size_t route_index = 0;   // route point nearest the target, found moving forward only
+  double goal_deadline = 0.0;    // s; a new goal after this
+  int goal_obstacle = -1;        // static obstacle the goal lies beside (-1: none)
+  double goal_angle = 0.0;       // rad, direction of the goal from that obstacle's centre
+  double loop_sense = 1.0;       // +1 or -1: the way round the obstacle
+};
+
+// How the operator corrects a step that would break a clearance, mildest first; each includes the ones before.
+enum class Correction { none, end_strafe, steer, slow, halt };
+constexpr Correction kCorrections[] = {Correction::none, Correction::end_strafe, Correction::steer, Correction::slow,
+                                       Correction::halt};
+
+class TeleopMaker {
+ public:
+  // Route cells keep this much more than the required clearance where they can: 0.85 + 0.35 = 1.2 m from an
+  // obstacle's surface with the default clearances, inside the recordings' 1 to 2 m.
+  static constexpr double kRouteMargin = 0.35;
+  static constexpr double kCell = 0.1;
+  static constexpr double kLookahead = 0.6;       // s of motion ahead that should stay clear of static obstacles
+  static constexpr double kMovingLookahead = 1.0;  // s, the same for moving obstacles (preferred, not required)
+  static constexpr double kLoopShare = 0.5;        // share of goals that continue round the same obstacle
+
+  TeleopMaker(const core::Scenario& world, const TargetSettings& t, std::uint64_t seed)
+      : t_(t),
+        s_(t.teleop),
+        rng_(seed),
+        world_(with_dummy_target(world)),
+        statics_(static_shapes(world, Vec2::Zero())),
+        center_(t.area_center_x, t.area_center_y),
+        half_w_(0.5 * t.area_width - t.area_margin),
+        half_h_(0.5 * t.area_height - t.area_margin),
+        free_space_(static_shapes(world, -center_), half_w_, half_h_, t.target_radius + t.static_clearance,
+                    kRouteMargin, kCell) {
+    for (std::size_t k = 0; k < world.obstacles.size(); ++k)
+      if (world.obstacles[k].moving()) moving_index_.push_back(k);
+    steps_ = static_cast<int>(std::ceil(t.duration / t.waypoint_period - 1e-9));
+  }
+
+  core::Scenario make(const core::Scenario& world, const std::string& name) {
+    Vec2 robot_start = Vec2::Zero();
+    const std::vector<Driver> states = drive(robot_start);
+    core::Scenario s;
+    s.name = name;
+    s.duration = t_.duration;
+    s.obstacles = world.obstacles;
+    s.robot_radius = t_.robot_radius;
+    s.target_radius = t_.target_radius;
+    s.sensor = t_.sensor;
+    s.target.reserve(states.size());
+    for (std::size_t k = 0; k < states.size(); ++k) s.target.push_back({time_of(static_cast<int>(k)), states[k].position});
+    s.robot_position = robot_start;
+    s.robot_velocity = Vec2::Zero();
+    return s;
+  }
+
+ private:
+  static core::Scenario with_dummy_target(const core::Scenario& world) {
+    core::Scenario s = world;
+    s.duration = 1.0;
+    s.target = {{0.0, Vec2::Zero()}};
+    return s;
+  }
+
+  static std::vector<Shape> static_shapes(const core::Scenario& world, const Vec2& shift) {
+    std::vector<Shape> shapes;
+    for (const core::ObstacleSpec& o : world.obstacles)
+      if (!o.moving()) {
+        Shape shape = shape_of(o);
+        shape.center += shift;
+        shapes.push_back(shape);
+      }
+    return shapes;
+  }
+
+  double time_of(int k) const { return k * t_.waypoint_period; }
+  Vec2 local(const Vec2& p) const { return p - center_; }
+  double nominal() const { return t_.max_speed; }
+
+  // Exponential wait with the given mean (never, for an infinite mean).
+  double exponential(double mean) {
+    const double u = rng_.uniform();
+    return std::isfinite(mean) ? -mean * std::log(1.0 - u) : kInfinity;
+  }
+  // Mean time between events lasting `mean_length` on average that take up `share` of the time.
+  static double mean_gap(double share, double mean_length) {
+    return share > 0.0 ? mean_length * (1.0 - share) / share : kInfinity;
+  }
+
+  // The driver's states at every waypoint, and the robot's start; backs up at dead ends (further after
+  // repeated failures there), starts over where the start itself is a trap or no robot start fits.
+  std::vector<Driver> drive(Vec2& robot_start) {
+    std::vector<Driver> states;
+    int backtracks = 0, failures_in_a_row = 0, failed_at = -1, robot_misses = 0;
+    while (true) {
+      if (states.empty()) states.push_back(start());
+      const int k = static_cast<int>(states.size()) - 1;
+      if (k == steps_) {
+        if (place_robot(states, robot_start)) return states;
+        if (++robot_misses > 100) throw std::runtime_error("generate_episode: found no start for the robot");
+        states.clear();
+        continue;
+      }
+      Driver next = states.back();
+      if (step(next, k)) {
+        states.push_back(std::move(next));
+        if (k >= failed_at) failures_in_a_row = 0;
+        continue;
+      }
+      if (++backtracks > t_.max_backtracks)
+        throw std::runtime_error("generate_episode: gave up after " + std::to_string(t_.max_backtracks) +
+                                 " dead ends; the world is too crowded for the target's clearances");
+      ++failures_in_a_row;
+      failed_at = std::max(failed_at, k);
+      const int back = std::min(k, 4 + 2 * failures_in_a_row);
+      states.resize(static_cast<std::size_t>(k - back + 1));
+      if (k - back == 0 && failures_in_a_row > 8) {
+        states.clear();
+        continue;
+      }
+      Driver& resume = states.back();
+      resume.yaw_noise = 0.0;
+      resume.goal_obstacle = -1;
+      if (!new_goal(resume, time_of(k - back))) states.clear();
+    }
+  }
+
+  // --- Constraints (the same rules as the smooth generator's).
+
+  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const {
+    if (!inside_area(local(a), half_w_ - extra, half_h_ - extra) ||
+        !inside_area(local(b), half_w_ - extra, half_h_ - extra))
+      return false;
+    const double need = t_.target_radius + t_.static_clearance + extra + 1e-6;
+    const double reach = (b - a).norm();
+    for (const Shape& s : statics_) {
+      if ((s.center - a).norm() - bounding_radius(s) - reach > need) continue;
+      if (segment_gap(s, a, b) < need) return false;
+    }
+    return true;
+  }
+
+  // Checked every 0.025 s along a-b while the target goes from a (time t0) to b (time t1).
+  bool moving_clear(const Vec2& a, const Vec2& b, double t0, double t1, double extra = 0.0) {
+    if (moving_index_.empty()) return true;
+    const int samples = std::max(1, static_cast<int>(std::ceil((t1 - t0) / 0.025 - 1e-9)));
+    for (int i = 0; i <= samples; ++i) {
+      const double alpha = static_cast<double>(i) / samples;
+      const Vec2 p = a + alpha * (b - a);
+      const std::vector<Shape>& shapes = world_.shapes_at(t0 + alpha * (t1 - t0));
+      for (const std::size_t k : moving_index_) {
+        const Shape& m = shapes[k];
+        if ((p - m.center).norm() - m.radius - t_.target_radius < t_.moving_clearance + extra) return false;
+      }
+    }
+    return true;
+  }
+
+  bool goal_usable(const Vec2& g, const Vec2& from) const {
+    return inside_area(local(g), half_w_, half_h_) && free_space_.free(local(g)) && (g - from).norm() >= 1.5;
+  }
+
+  // --- Intentions.
+
+  // The point `gap` metres from the surface of static obstacle j, in direction `angle` from its centre.
+  Vec2 beside(std::size_t j, double angle, double gap) const {
+    const Shape& s = statics_[j];
+    const Vec2 u = direction(angle);
+    double lo = 0.0, hi = bounding_radius(s) + gap + 1.0;
+    for (int i = 0; i < 40; ++i) {  // the signed distance grows along a ray out of a convex shape
+      const double mid = 0.5 * (lo + hi);
+      (signed_distance(s, s.center + mid * u) < gap ? lo : hi) = mid;
+    }
+    return s.center + hi * u;
+  }
+
+  // A goal beside an obstacle: round the same one (a loop) or beside a neighbour (weaving); in a world
+  // without static obstacles, anywhere a few metres away. False when none can be reached.
+  bool new_goal(Driver& d, double t) {
+    std::vector<std::size_t> near;
+    for (std::size_t j = 0; j < statics_.size(); ++j) {
+      const double r = (statics_[j].center - d.position).norm();
+      if (r >= 2.0 && r <= 10.0 && static_cast<int>(j) != d.goal_obstacle) near.push_back(j);
+    }
+    for (int attempt = 0; attempt < 300; ++attempt) {
+      const double gap = rng_.uniform(s_.goal_gap_min, s_.goal_gap_max);
+      int obstacle = -1;
+      double angle = 0.0, sense = d.loop_sense;
+      Vec2 g;
+      if (attempt < 200 && d.goal_obstacle >= 0 && rng_.chance(kLoopShare)) {
+        obstacle = d.goal_obstacle;
+        angle = d.goal_angle + sense * rng_.uniform(0.8, 1.8);
+        g = beside(static_cast<std::size_t>(obstacle), angle, gap);
+      } else if (attempt < 200 && !statics_.empty()) {
+        obstacle = static_cast<int>(near.empty() ? rng_.index(statics_.size()) : near[rng_.index(near.size())]);
+        angle = rng_.uniform(-kPi, kPi);
+        sense = rng_.chance(0.5) ? 1.0 : -1.0;
+        g = beside(static_cast<std::size_t>(obstacle), angle, gap);
+      } else {
+        g = d.position + rng_.uniform(3.0, 10.0) * direction(rng_.uniform(-kPi, kPi));
+      }
+      if (!goal_usable(g, d.position)) continue;
+      std::vector<Vec2> route = free_space_.route(local(d.position), local(g));
+      if (route.empty()) continue;
+      double length = 0.0;
+      for (std::size_t j = 0; j < route.size(); ++j) {
+        route[j] += center_;
+        if (j > 0) length += (route[j] - route[j - 1]).norm();
+      }
+      d.route = std::make_shared<const std::vector<Vec2>>(std::move(route));
+      d.route_index = 0;
+      d.goal_deadline = t + 2.0 * length / nominal() + 10.0;
+      d.goal_obstacle = obstacle;
+      d.goal_angle = angle;
+      d.loop_sense = sense;
+      return true;
+    }
+    return false;
+  }
+
+  // A fresh route to the current goal (after straying from the route).
+  bool reroute(Driver& d) {
+    std::vector<Vec2> route = free_space_.route(local(d.position), local(d.route->back()));
+    if (route.empty()) return false;
+    for (Vec2& p : route) p += center_;
+    d.route = std::make_shared<const std::vector<Vec2>>(std::move(route));
+    d.route_index = 0;
+    return true;
+  }
+
+  // Moves route_index to the route point nearest the target (searching forward a little); its distance.
+  static double advance_on_route(Driver& d) {
+    const std::vector<Vec2>& route = *d.route;
+    double best = (route[d.route_index] - d.position).norm();
+    const std::size_t end = std::min(route.size(), d.route_index + 40);
+    for (std::size_t j = d.route_index + 1; j < end; ++j)
+      if (const double r = (route[j] - d.position).norm(); r < best) best = r, d.route_index = j;
+    return best;
+  }
+
+  // The direction of motion the operator wants: towards the route point `lookahead` metres further on.
+  double wanted_course(const Driver& d) const {
+    const std::vector<Vec2>& route = *d.route;
+    std::size_t j = d.route_index;
+    const double lookahead = 0.5 + 0.6 * nominal();
+    for (double along = 0.0; j + 1 < route.size() && along < lookahead; ++j) along += (route[j + 1] - route[j]).norm();
+    const Vec2 to = route[j] - d.position;
+    return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : d.yaw;
+  }
+
+  // New goal when the goal is reached or overdue, a new route when the target strayed; false at a dead end.
+  bool update_intentions(Driver& d, double t) {
+    if ((d.route->back() - d.position).norm() < 0.8 || t >= d.goal_deadline) return new_goal(d, t);
+    if (advance_on_route(d) > 0.8) return reroute(d) || new_goal(d, t);
+    return true;
+  }
+
+  // --- Commands.
+
+  // The command update at time `now`, `period` seconds after the last one.
+  void update_commands(Driver& d, double now, double period) {
+    // Stops and strafes start and end.
+    if (now >= d.next_stop && now >= d.stop_until) {
+      d.stop_until = now + rng_.uniform(s_.stop_min, s_.stop_max);
+      d.next_stop = d.stop_until + exponential(mean_gap(s_.stop_share, 0.5 * (s_.stop_min + s_.stop_max)));
+    }
+    if (d.sideways != 0.0 && now >= d.strafe_until) {
+      d.sideways = 0.0;
+      d.next_strafe = now + exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
+    } else if (d.sideways == 0.0 && now >= d.next_strafe) {
+      d.strafe_until = now + rng_.uniform(s_.strafe_min, s_.strafe_max);
+      d.sideways = (rng_.chance(0.5) ? 1.0 : -1.0) * rng_.uniform(s_.strafe_speed_min, s_.strafe_speed_max);
+    }
+    // Mean-reverting forward command and yaw-rate noise (exact discretisation of an Ornstein-Uhlenbeck
+    // process over `period`, so that the statistics do not depend on the command rate).
+    const double fa = std::exp(-period / s_.forward_time);
+    d.forward = std::clamp(s_.forward_mean + fa * (d.forward - s_.forward_mean) +
+                               s_.forward_noise * std::sqrt(1.0 - fa * fa) * rng_.normal(),
+                           0.0, 1.0);
+    const double ya = std::exp(-period / s_.yaw_noise_time);
+    d.yaw_noise = ya * d.yaw_noise + s_.yaw_noise * std::sqrt(1.0 - ya * ya) * rng_.normal();
+    steer(d);
+  }
+
+  // Yaw rate turning the direction of motion (body heading plus the strafe's angle) towards the route.
+  void steer(Driver& d) const {
+    const double slip = (d.forward > 0.0 || d.sideways != 0.0) ? std::atan2(d.sideways, d.forward) : 0.0;
+    const double error = wrap_angle(wanted_course(d) - slip - d.yaw);
+    d.yaw_rate = std::clamp(s_.yaw_gain * error + d.yaw_noise, -s_.yaw_rate_max, s_.yaw_rate_max);
+  }
+
+  // Moves the body for `tau` seconds at the current commands.
+  void move(Driver& d, Vec2& p, double now, double tau) const {
+    if (now >= d.stop_until) {
+      const double mid = d.yaw + 0.5 * d.yaw_rate * tau;
+      const Vec2 body(d.forward * nominal(), d.sideways * nominal());
+      const Vec2 ahead = direction(mid), left(-ahead.y(), ahead.x());
+      p += tau * (body.x() * ahead + body.y() * left);
+    }
+    d.yaw = wrap_angle(d.yaw + d.yaw_rate * tau);
+  }
+
+  // --- One step.
+
+  // The step from time t to t_next with a correction applied at its start; the commands change on their
+  // own schedule inside it.
+  void simulate(Driver& d, double t, double t_next, Correction c) {
+    if (c >= Correction::end_strafe && d.sideways != 0.0) {
+      d.sideways = 0.0;
+      d.strafe_until = t;
+      d.next_strafe = t + exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
+    }
+    if (c >= Correction::steer) d.yaw_noise = 0.0;
+    if (c >= Correction::slow) d.forward *= 0.5;
+    if (c >= Correction::halt) d.stop_until = std::max(d.stop_until, t_next);
+    if (c != Correction::none) steer(d);
+    Vec2 p = d.position;
+    double now = t;
+    while (d.next_command <= t_next) {
+      move(d, p, now, d.next_command - now);
+      const double period = rng_.uniform(s_.command_period_min, s_.command_period_max);
+      now = d.next_command;
+      d.next_command += period;
+      update_commands(d, now, period);
+    }
+    move(d, p, now, t_next - now);
+    d.position = round_to(p, t_.decimals);
+  }
+
+  // Advances the driver by one waypoint period from step k; false at a dead end. Tries the corrections in
+  // order: the first whose step is clear and leaves the way ahead clear wins, else the first whose step is
+  // clear.
+  bool step(Driver& d, int k) {
+    const double t = time_of(k), t_next = time_of(k + 1);
+    if (!update_intentions(d, t)) return false;
+    const Random rng_before = rng_;
+    Driver fallback;
+    Random fallback_rng = rng_;
+    bool have_fallback = false;
+    for (const Correction c : kCorrections) {
+      rng_ = rng_before;
+      Driver next = d;
+      simulate(next, t, t_next, c);
+      if (!static_clear(d.position, next.position) || !moving_clear(d.position, next.position, t, t_next)) continue;
+      const Vec2 velocity = (next.position - d.position) / t_.waypoint_period;
+      const bool ahead_clear =
+          static_clear(next.position, next.position + kLookahead * velocity) &&
+          moving_clear(next.position, next.position + kMovingLookahead * velocity, t_next, t_next + kMovingLookahead,
+                       0.2);
+      if (ahead_clear) {
+        d = std::move(next);
+        return true;
+      }
+      if (!have_fallback) fallback = std::move(next), fallback_rng = rng_, have_fallback = true;
+    }
+    if (!have_fallback) return false;
+    d = std::move(fallback);
+    rng_ = fallback_rng;
+    return true;
+  }
+
+  // --- The start and the robot.
+
+  Driver start() {
+    for (int attempt = 0; attempt < 100000; ++attempt) {
+      Driver d;
+      d.position = round_to(center_ + Vec2(rng_.uniform(-half_w_, half_w_), rng_.uniform(-half_h_, half_h_)),
+                            t_.decimals);
+      if (!free_space_.free(local(d.position)) || !static_clear(d.position, d.position, 0.1)) continue;
+      if (!moving_clear(d.position, d.position, 0.0, 0.5, 0.3)) continue;
+      if (!new_goal(d, 0.0)) continue;
+      d.yaw = wanted_course(d);
+      if (!robot_fits(robot_behind(d.position, d.yaw), d.position)) continue;
+      d.forward = s_.forward_mean;
+      d.next_command = rng_.uniform(s_.command_period_min, s_.command_period_max);
+      d.next_strafe = exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
+      d.next_stop = exponential(mean_gap(s_.stop_share, 0.5 * (s_.stop_min + s_.stop_max)));
+      steer(d);
+      return d;
+    }
+    throw std::runtime_error("generate_episode: found no free start for the target and the robot");
+  }
+
+  Vec2 robot_behind(const Vec2& target, double heading) const {
+    return round_to(target - t_.robot_distance * direction(heading), t_.decimals);
+  }
+
+  // Inside the area, clear of every obstacle by robot_clearance at t = 0, and seeing the target.
+  bool robot_fits(const Vec2& robot, const Vec2& target) {
+    const double half_w = 0.5 * t_.area_width - t_.robot_radius, half_h = 0.5 * t_.area_height - t_.robot_radius;
+    return inside_area(local(robot), half_w, half_h) &&
+           world_.clearance(robot, 0.0) >= t_.robot_radius + t_.robot_clearance &&
+           !world_.segment_blocked(robot, target, 0.0);
+  }
+
+  // As the smooth generator: robot_distance behind the target's start, opposite the way it first moves
+  // (turned by up to 0.6 rad when that spot is taken).
+  bool place_robot(const std::vector<Driver>& states, Vec2& robot) {
+    const Vec2 start = states.front().position;
+    double heading = states.front().yaw;
+    for (const Driver& d : states)
+      if ((d.position - start).norm() >= 0.5) {
+        heading = std::atan2(d.position.y() - start.y(), d.position.x() - start.x());
+        break;
+      }
+    for (const double turn : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5, -0.5, 0.6, -0.6}) {
+      robot = robot_behind(start, heading + turn);
+      if (robot_fits(robot, start)) return true;
+    }
+    return false;
+  }
+
+  TargetSettings t_;
+  TeleopStyle s_;
+  Random rng_;
+  World world_;
+  std::vector<Shape> statics_;
+  Vec2 center_;
+  double half_w_ = 0.0, half_h_ = 0.0;
+  FreeSpace free_space_;
+  std::vector<std::size_t> moving_index_;
+  int steps_ = 0;
+};
+
+// The calm style of the 0.5 m/s recording and the wild one of the 1 m/s recording.
+TeleopStyle calm_style() {
+  TeleopStyle s;
+  s.forward_mean = 0.92;
+  s.forward_noise = 0.1;
+  s.forward_time = 2.0;
+  s.yaw_gain = 1.0;
+  s.yaw_noise = 0.25;
+  s.yaw_noise_time = 1.0;
+  s.yaw_rate_max = 1.5;
+  s.strafe_share = 0.01;
+  s.strafe_min = 0.3;
+  s.strafe_max = 1.0;
+  s.strafe_speed_min = 0.5;
+  s.strafe_speed_max = 1.0;
+  return s;
+}
+
+TeleopStyle wild_style() {
+  TeleopStyle s;
+  s.forward_mean = 0.95;
+  s.forward_noise = 0.15;
+  s.forward_time = 1.0;
+  s.yaw_gain = 2.5;
+  s.yaw_noise = 0.8;
+  s.yaw_noise_time = 0.4;
+  s.yaw_rate_max = 3.0;
+  s.strafe_share = 0.38;
+  s.strafe_min = 0.4;
+  s.strafe_max = 1.2;
+  s.strafe_speed_min = 0.6;
+  s.strafe_speed_max = 1.0;
+  return s;
+}
+
+double lerp(double a, double b, double x) { return a + x * (b - a); }
+
+}  // namespace
+
+TargetSettings teleop_target_settings(double nominal_speed) {
+  TargetSettings t;
+  t.motion = TargetMotion::teleop;
+  t.waypoint_period = 0.1;
+  t.max_speed = nominal_speed;
+  t.min_speed = std::min(t.min_speed, nominal_speed);
+  const double x = std::isfinite(nominal_speed) ? std::clamp((nominal_speed - 0.5) / 0.5, 0.0, 1.0) : 0.0;
+  const TeleopStyle calm = calm_style(), wild = wild_style();
+  TeleopStyle& s = t.teleop;
+  s.command_period_min = lerp(calm.command_period_min, wild.command_period_min, x);
+  s.command_period_max = lerp(calm.command_period_max, wild.command_period_max, x);
+  s.forward_mean = lerp(calm.forward_mean, wild.forward_mean, x);
+  s.forward_noise = lerp(calm.forward_noise, wild.forward_noise, x);
+  s.forward_time = lerp(calm.forward_time, wild.forward_time, x);
+  s.yaw_gain = lerp(calm.yaw_gain, wild.yaw_gain, x);
+  s.yaw_noise = lerp(calm.yaw_noise, wild.yaw_noise, x);
+  s.yaw_noise_time = lerp(calm.yaw_noise_time, wild.yaw_noise_time, x);
+  s.yaw_rate_max = lerp(calm.yaw_rate_max, wild.yaw_rate_max, x);
+  s.strafe_share = lerp(calm.strafe_share, wild.strafe_share, x);
+  s.strafe_min = lerp(calm.strafe_min, wild.strafe_min, x);
+  s.strafe_max = lerp(calm.strafe_max, wild.strafe_max, x);
+  s.strafe_speed_min = lerp(calm.strafe_speed_min, wild.strafe_speed_min, x);
+  s.strafe_speed_max = lerp(calm.strafe_speed_max, wild.strafe_speed_max, x);
+  s.stop_share = lerp(calm.stop_share, wild.stop_share, x);
+  s.stop_min = lerp(calm.stop_min, wild.stop_min, x);
+  s.stop_max = lerp(calm.stop_max, wild.stop_max, x);
+  s.goal_gap_min = lerp(calm.goal_gap_min, wild.goal_gap_min, x);
+  s.goal_gap_max = lerp(calm.goal_gap_max, wild.goal_gap_max, x);
+  return t;
+}
+
+namespace generator {
+
+core::Scenario generate_teleop_episode(const core::Scenario& world, const TargetSettings& target, std::uint64_t seed,
+                                       const std::string& name) {
+  TeleopMaker maker(world, target, seed);
+  return maker.make(world, name);
+}
+
+}  // namespace generator
+
+}  // namespace occtrack::sim
