@@ -1,5 +1,6 @@
 #include <stdexcept>
 
+#include "occtrack/planners/autochaser.hpp"
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
@@ -8,7 +9,7 @@
 namespace occtrack::planners {
 
 std::vector<std::string> planner_names() {
-  return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q"};
+  return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q", "autochaser"};
 }
 
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options) {
@@ -22,6 +23,11 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") return std::make_unique<Follower>();
+  if (name == "autochaser") {
+    AutoChaserSettings s;
+    s.waypoints = options.waypoints;  // 0: constant-velocity prediction
+    return std::make_unique<AutoChaser>(s);
+  }
   for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q}) {
     if (name != learned_planner_name(variant)) continue;
     LearnedPolicySettings s;
