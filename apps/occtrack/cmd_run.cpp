@@ -40,7 +40,7 @@ int run(const RunOptions& o) {
   std::printf("  compute          median %.2f, p99 %.2f, max %.2f ms per cycle (%d cycles, %d failed)\n",
               m.compute_ms.median, m.compute_ms.p99, m.compute_ms.max, m.cycles, m.planner_failures);
   if (m.latency_ms > 0.0 || m.occlusion_stretches > 0)
-    std::printf("  latency          %.1f ms (compute scale %g); %d spells of lost sight, the longest %.2f s\n",
+    std::printf("  latency          %.1f ms (compute scale %g); sight lost %d times, the longest for %.2f s\n",
                 m.latency_ms, m.compute_scale, m.occlusion_stretches, m.longest_occlusion_s);
   std::printf("  tracking         mean distance %.2f m, %.0f%% of the time in [%.1f, %.1f] m; target out of range "
               "%.1f s\n",

@@ -277,5 +277,43 @@ if [ "$rc" -ne 0 ]; then pass "bench projection --precision half exits non-zero 
 run_tool bench
 if [ "$rc" -ne 0 ]; then pass "bench without a benchmark exits non-zero ($rc)"; else fail "bench without a benchmark exits non-zero"; fi
 
+# ------------------------------------------------------------------------------------------------------------
+# Episode options of Protocol v2 (apps/occtrack/episode_common.hpp): bad values are refused before anything
+# runs, with a message naming the option; good ones run.
+
+scenario_file="$data/scenarios/example.yaml"
+expect_bad_option() {  # expect_bad_option OPTION VALUE TEXT
+  run_tool run "$scenario_file" --planner follower "$1" "$2"
+  if [ "$rc" -ne 0 ]; then pass "run $1 $2 exits non-zero ($rc)"; else fail "run $1 $2 exits non-zero"; fi
+  if contains "$tmp/err" "$1: $3"; then pass "run $1 $2: stderr says \"$1: $3\""; else fail "run $1 $2: stderr says \"$1: $3\"" "$(tail_of "$tmp/err")"; fi
+}
+expect_bad_option --latency -5 "must be none, auto or a number of milliseconds >= 0, got -5"
+expect_bad_option --latency soon "must be none, auto or a number"
+expect_bad_option --compute-scale 0 "must be a number > 0, got 0"
+expect_bad_option --tau -0.1 "must be a number >= 0, got -0.1"
+expect_bad_option --beams 0 "must be an integer >= 1, got 0"
+expect_bad_option --lidar-noise nan "must be a number >= 0, got nan"
+expect_bad_option --beam-dropout 1.5 "must be in [0, 1], got 1.5"
+expect_bad_option --beam-dropout -0.5 "must be in [0, 1], got -0.5"
+expect_bad_option --target-noise 0.1 "must be POS,VEL"
+expect_bad_option --target-noise 0.1,nan "must be POS,VEL"
+expect_bad_option --target-observation sometimes "sometimes"
+expect_bad_option --waypoints -1 "must be an integer >= 0, got -1"
+
+run_tool run "$scenario_file" --planner follower --latency auto --compute-scale 10 --tau 0.25 --beams 360 \
+  --lidar-noise 0.01 --beam-dropout 0.1 --target-noise 0.05,0.1 --target-observation line_of_sight \
+  --json "$tmp/episode_v2.json"
+if [ "$rc" -eq 0 ]; then pass "run with every v2 option exits 0"; else fail "run with every v2 option exits 0 (got $rc)" "$(tail_of "$tmp/err")"; fi
+if contains "$tmp/err" "latency auto: " && contains "$tmp/err" "x compute scale 10"; then
+  pass "run --latency auto prints the measured latency"
+else
+  fail "run --latency auto prints the measured latency" "$(tail_of "$tmp/err")"
+fi
+if json_check "$tmp/episode_v2.json" 'd["compute_scale"] == 10 and d["latency_ms"] > 0 and isinstance(d["occlusion_stretches"], int) and d["longest_occlusion_s"] <= d["occlusion_time_s"] + 1e-9'; then
+  pass "run --json records latency_ms, compute_scale, occlusion_stretches, longest_occlusion_s"
+else
+  fail "run --json records the v2 keys" "$(tail_of "$tmp/episode_v2.json")"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
