@@ -109,6 +109,7 @@ int run(const Options& o) {
 void add_bench_command(CLI::App& app, int& exit_code) {
   CLI::App* bench = add_command_group(app, "bench", "Measure the speed of occtrack's components");
   add_bench_suite_command(*bench, exit_code);
+  add_bench_paper_command(*bench, exit_code);
 #ifdef OCCTRACK_HAVE_LEARNING
   add_bench_train_command(*bench, exit_code);
 #endif

@@ -9,6 +9,7 @@ namespace occtrack::app {
 void add_project_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
 void add_bench_suite_command(CLI::App& bench, int& exit_code);
+void add_bench_paper_command(CLI::App& bench, int& exit_code);  // cmd_bench_paper.cpp
 void add_run_command(CLI::App& app, int& exit_code);
 void add_scenario_command(CLI::App& app, int& exit_code);
 void add_dataset_command(CLI::App& app, int& exit_code);       // cmd_dataset.cpp

@@ -191,11 +191,17 @@ std::string tradeoff_svg(const std::vector<PaperRow>& rows, const std::string& t
   svg += "<style>\ntext{font-family:'DejaVu Sans',Helvetica,Arial,sans-serif;fill:#222}\n"
          ".title{font-size:16px;font-weight:bold}\n.tick{font-size:11px;fill:#555}\n.axis-title{font-size:13px}\n"
          ".legend{font-size:12px}\n.legend-head{font-size:12.5px;font-weight:bold}\n"
-         ".grid{stroke:#e6e6e6;stroke-width:1}\n.axis{stroke:#333;stroke-width:1.2;fill:none}\n</style>\n";
+         ".grid{stroke:#dcdcdc;stroke-width:1}\n.minor{stroke:#f2f2f2;stroke-width:1}\n.axis{stroke:#333;stroke-width:1.2;fill:none}\n</style>\n";
   svg += "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n";
   svg += text(left, 30, title.empty() ? "Target hidden against cycle time" : title, "title");
 
   // Grid, ticks and axes.
+  for (int k = decade_lo; k < decade_hi; ++k)  // unlabelled 2..9 within each decade, so that values read off
+    for (int m = 2; m <= 9; ++m) {
+      const double x = to_x(m * std::pow(10.0, k));
+      svg += "<line class=\"minor\" x1=\"" + px(x) + "\" y1=\"" + px(top) + "\" x2=\"" + px(x) + "\" y2=\"" +
+             px(top + height) + "\"/>\n";
+    }
   for (int k = decade_lo; k <= decade_hi; ++k) {
     const double x = to_x(std::pow(10.0, k));
     svg += "<line class=\"grid\" x1=\"" + px(x) + "\" y1=\"" + px(top) + "\" x2=\"" + px(x) + "\" y2=\"" +

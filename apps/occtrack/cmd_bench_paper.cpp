@@ -1,0 +1,242 @@
+// occtrack bench paper [--suites a,b,...] [--planners ...] [--compute-scales 1,10] [--episodes N] [--jobs J]
+//                      [--out DIR]
+//
+// The v2 benchmark in one command (issue 10): every planner row of the paper's Table I plus ours, on the v2
+// suites, at each compute scale, with the sensing settings of shared/spec/simulation.md ("Suites v2"). Writes
+// DIR/tables.md (io/paper_tables.hpp), DIR/tradeoff.svg and DIR/episodes.json (every episode's metrics), and
+// prints the tables. The files are rewritten after every finished run, so that an interrupted run keeps what
+// it did.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "cli_support.hpp"
+#include "commands.hpp"
+#include "episode_common.hpp"
+#include "occtrack/io/paper_tables.hpp"
+#include "occtrack/io/results.hpp"
+#include "suite_runner.hpp"
+
+namespace fs = std::filesystem;
+
+namespace occtrack::app {
+
+namespace {
+
+/// One row of the paper's Table I, or one of ours: a planner and the options that set it apart.
+struct PaperPlanner {
+  const char* label;
+  const char* planner;
+  const char* description;
+  void (*tune)(planners::PlannerOptions&);
+};
+
+const std::vector<PaperPlanner>& paper_planners() {
+  static const std::vector<PaperPlanner> rows = {
+      {"follower", "follower", "follower (naive, no occlusion awareness)", [](planners::PlannerOptions&) {}},
+      {"autochaser", "autochaser", "AutoChaser, constant-velocity target prediction",
+       [](planners::PlannerOptions& p) { p.waypoints = 0; }},
+      {"autochaser-wp100", "autochaser", "AutoChaser with 100 true future target waypoints as prior",
+       [](planners::PlannerOptions& p) { p.waypoints = 100; }},
+      {"projcem", "projcem", "Proj-CEM, online budget", [](planners::PlannerOptions&) {}},
+      {"bc", "bc", "behaviour cloning, B = 30", [](planners::PlannerOptions&) {}},
+      {"cvae-b30", "cvae", "learned policy (CVAE), B = 30", [](planners::PlannerOptions& p) { p.batch = 30; }},
+      {"cvae-b5", "cvae", "learned policy (CVAE), B = 5", [](planners::PlannerOptions& p) { p.batch = 5; }},
+      {"cvae-fixed-q", "cvae-fixed-q", "learned policy with fixed q, B = 30", [](planners::PlannerOptions&) {}},
+      {"cvae-paper", "cvae", "the paper's policy: B = 30, without the last plan and the stop plan ranked",
+       [](planners::PlannerOptions& p) { p.keep_last_plan = p.rank_stop = false; }},
+  };
+  return rows;
+}
+
+std::vector<std::string> paper_planner_labels() {
+  std::vector<std::string> labels;
+  for (const auto& p : paper_planners()) labels.push_back(p.label);
+  return labels;
+}
+
+struct PaperOptions {
+  std::vector<std::string> suites = {"sixwall-1ms", "sixwall-2ms", "sixwall-dynamic-1.5ms",
+                                     "random-2ms",  "clutter-2ms", "clutter-dynamic-2ms"};
+  std::vector<std::string> planners = paper_planner_labels();
+  std::vector<double> compute_scales = {1.0, 10.0};
+  int episodes = 0;
+  int jobs = 1;
+  std::string out = "bench-paper";
+};
+
+/// The episode options of the v2 tables (shared/spec/simulation.md, "Suites v2"): latency auto, tau 0.25 s,
+/// the paper's LiDAR (shared/reference/paper_setup.md: 360 beams, range noise sigma 0.01 m), target estimate
+/// noise 0.05 m and 0.1 m/s, the target's state always known (as in the paper).
+EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_scale) {
+  EpisodeCliOptions o;
+  o.planner = row.planner;
+  row.tune(o.planner_options);
+  o.latency = "auto";
+  o.compute_scale = compute_scale;
+  o.tau = 0.25;
+  o.beams = "360";
+  o.lidar_noise = "0.01";
+  o.target_noise = "0.05,0.1";
+  o.target_observation = "always";
+  return o;
+}
+
+std::string join(const std::vector<std::string>& items, const char* separator = ",") {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : separator) + item;
+  return out;
+}
+
+std::string scale_text(double scale) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", scale);
+  return text;
+}
+
+/// The table header: every setting, and what was skipped or failed.
+std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
+                                        const std::vector<std::string>& not_run) {
+  std::vector<std::string> lines = {
+      "command: `occtrack bench paper --suites " + join(o.suites) + " --planners " + join(o.planners) +
+          " --compute-scales " + join(scales) + (o.episodes > 0 ? " --episodes " + std::to_string(o.episodes) : "") +
+          " --jobs " + std::to_string(o.jobs) + "`",
+      o.episodes > 0 ? "episodes: the first " + std::to_string(o.episodes) + " of each suite only (a partial run)"
+                     : "episodes: every episode of each suite",
+      "latency: auto: the planner's median cycle on scans replayed from the suite, measured once per planner, "
+      "compute scale and suite before its episodes (not while others run), times the compute scale; then held "
+      "fixed",
+      "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
+      "robot response: first-order lag tau 0.25 s",
+      "LiDAR: 360 beams, Gaussian range noise sigma 0.01 m, range the scenario's",
+      "target estimate: Gaussian noise 0.05 m on position, 0.1 m/s on velocity; target_observation always",
+      "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
+          std::to_string(std::thread::hardware_concurrency()) + " hardware threads",
+  };
+  for (const auto& p : paper_planners())
+    if (std::find(o.planners.begin(), o.planners.end(), p.label) != o.planners.end())
+      lines.push_back(std::string("planner ") + p.label + ": " + p.description);
+  for (const auto& n : not_run) lines.push_back("not run: " + n);
+  return lines;
+}
+
+void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows, const std::vector<std::string>& header,
+                   const PaperOptions& o) {
+  const std::string who = "occtrack bench paper";
+  if (!write_text_file(who, (out / "tables.md").string(), io::paper_tables(rows, header)) ||
+      !write_text_file(who, (out / "tradeoff.svg").string(),
+                       io::tradeoff_svg(rows, "Target hidden against cycle time (occtrack bench paper)")))
+    throw std::runtime_error(out.string() + ": cannot write the results");
+  nlohmann::json j;
+  j["created_by"] = created_by("bench paper");
+  j["settings"] = header;
+  j["episodes_per_suite"] = o.episodes;
+  j["runs"] = nlohmann::json::array();
+  for (const auto& r : rows)
+    j["runs"].push_back({{"label", r.label},
+                         {"compute_scale", r.compute_scale},
+                         {"latency_ms", r.latency_ms},
+                         {"result", nlohmann::json::parse(io::suite_json(r.result))}});
+  if (!write_text_file(who, (out / "episodes.json").string(), j.dump(1) + "\n"))
+    throw std::runtime_error(out.string() + ": cannot write the results");
+}
+
+int run(const PaperOptions& o) {
+  std::vector<std::string> scales;
+  for (const double s : o.compute_scales) {
+    if (!(std::isfinite(s) && s > 0.0))
+      throw std::invalid_argument("--compute-scales: each must be a number > 0, got " + scale_text(s));
+    scales.push_back(scale_text(s));
+  }
+  std::vector<const PaperPlanner*> planners;
+  for (const auto& label : o.planners) {
+    const auto& all = paper_planners();
+    const auto it = std::find_if(all.begin(), all.end(), [&](const PaperPlanner& p) { return label == p.label; });
+    if (it == all.end())
+      throw std::invalid_argument("--planners: unknown row \"" + label + "\" (known: " +
+                                  join(paper_planner_labels(), ", ") + ")");
+    planners.push_back(&*it);
+  }
+  std::vector<Suite> suites;
+  for (const auto& name : o.suites) suites.push_back(load_suite(name, o.episodes));  // refuse bad files up front
+
+  // A planner this build cannot make (an unknown name, a missing model) is skipped, not the whole run.
+  std::vector<std::string> not_run;
+  std::vector<const PaperPlanner*> runnable;
+  for (const PaperPlanner* p : planners) {
+    try {
+      planners::make_planner(p->planner, paper_episode_options(*p, 1.0).planner_options);
+      runnable.push_back(p);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "occtrack bench paper: skipping %s: %s\n", p->label, e.what());
+      not_run.push_back(std::string(p->label) + " (" + e.what() + ")");
+    }
+  }
+
+  const fs::path out(o.out);
+  fs::create_directories(out);
+  std::vector<io::PaperRow> rows;
+  bool failed = false;
+  const std::size_t total = runnable.size() * o.compute_scales.size() * suites.size();
+  std::size_t started = 0;
+  for (const PaperPlanner* p : runnable)
+    for (const double scale : o.compute_scales)
+      for (const Suite& suite : suites) {
+        const std::string name = std::string(p->label) + " x" + scale_text(scale) + " " + suite.name;
+        std::fprintf(stderr, "bench paper [%zu/%zu]: %s, compute scale %s, %s (%zu episodes)\n", ++started, total,
+                     p->label, scale_text(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
+        try {
+          const EpisodeCliOptions episode = paper_episode_options(*p, scale);
+          SuiteRunOptions run;
+          run.planner = episode.planner;
+          run.planner_options = episode.planner_options;
+          run.settings = resolve_episode_settings(episode, suite.scenarios);  // alone, before the episodes
+          run.jobs = o.jobs;
+          run.progress_label = "  " + name + " ";
+          io::PaperRow row;
+          row.label = p->label;
+          row.compute_scale = scale;
+          row.latency_ms = run.settings.latency_ms.value_or(0.0);
+          row.result = run_suite(suite, run);
+          rows.push_back(std::move(row));
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "occtrack bench paper: %s failed: %s\n", name.c_str(), e.what());
+          not_run.push_back(name + " (" + e.what() + ")");
+          failed = true;
+        }
+        write_outputs(out, rows, settings_lines(o, scales, not_run), o);
+      }
+  const std::vector<std::string> header = settings_lines(o, scales, not_run);
+  write_outputs(out, rows, header, o);
+  std::cout << io::paper_tables(rows, header);
+  std::fprintf(stderr, "occtrack bench paper: wrote %s, %s and %s\n", (out / "tables.md").c_str(),
+               (out / "tradeoff.svg").c_str(), (out / "episodes.json").c_str());
+  return failed ? kExitInputError : kExitOk;  // a skipped planner is said above, not an error
+}
+
+}  // namespace
+
+void add_bench_paper_command(CLI::App& bench, int& exit_code) {
+  auto [cmd, o] = add_command<PaperOptions>(
+      bench, "paper", "Run every planner on the v2 suites at each compute scale and write the paper's tables");
+  cmd->add_option("--suites", o->suites, "Suite folders or names under scenarios/, comma-separated")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--planners", o->planners, "Rows to run, comma-separated: " + join(paper_planner_labels(), ", "))
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--compute-scales", o->compute_scales, "Compute scales, comma-separated (each > 0)")
+      ->delimiter(',')
+      ->capture_default_str();
+  add_bounded_option(cmd, "--episodes", o->episodes, "Run only the first N episodes of each suite (0: all)", 0,
+                     1000000);
+  add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
+  cmd->add_option("--out", o->out, "Folder for tables.md, tradeoff.svg and episodes.json")->capture_default_str();
+  set_command_body(cmd, exit_code, [o] { return run(*o); });
+}
+
+}  // namespace occtrack::app

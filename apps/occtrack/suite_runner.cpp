@@ -1,0 +1,82 @@
+#include "suite_runner.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/io/svg.hpp"
+#include "occtrack/sim/metrics.hpp"
+
+namespace fs = std::filesystem;
+
+namespace occtrack::app {
+
+namespace {
+
+fs::path suite_folder(const std::string& suite) {
+  if (fs::is_directory(suite)) return suite;
+  if (fs::is_directory(fs::path("scenarios") / suite)) return fs::path("scenarios") / suite;
+  throw std::runtime_error("suite \"" + suite + "\": no such folder (nor scenarios/" + suite + ")");
+}
+
+}  // namespace
+
+Suite load_suite(const std::string& suite, int episodes) {
+  const fs::path folder = suite_folder(suite);
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(folder))
+    if (entry.path().extension() == ".yaml" || entry.path().extension() == ".yml") files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw std::runtime_error(folder.string() + ": no scenario files (*.yaml)");
+  if (episodes > 0 && static_cast<std::size_t>(episodes) < files.size()) files.resize(episodes);
+  Suite s;
+  s.name = folder.filename().string();
+  if (s.name.empty()) s.name = folder.parent_path().filename().string();  // "scenarios/x/"
+  for (const auto& f : files) s.scenarios.push_back(io::read_scenario(f.string()));
+  return s;
+}
+
+core::SuiteResult run_suite(const Suite& suite, const SuiteRunOptions& o) {
+  const auto& scenarios = suite.scenarios;
+  if (!o.svg_dir.empty()) fs::create_directories(o.svg_dir);
+  std::vector<core::EpisodeMetrics> metrics(scenarios.size());
+  std::atomic<std::size_t> next{0};
+  int done = 0;
+  std::mutex print;
+  std::string failure;
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < scenarios.size(); i = next++) {
+      try {
+        auto planner = planners::make_planner(o.planner, o.planner_options);
+        const sim::EpisodeResult r = sim::run_episode(scenarios[i], *planner, o.settings);
+        metrics[i] = r.metrics;
+        if (!o.svg_dir.empty()) {
+          std::ofstream svg(fs::path(o.svg_dir) / (scenarios[i].name + "." + planner->name() + ".svg"));
+          svg << io::episode_svg(scenarios[i], r.trace, r.metrics);
+        }
+        const std::lock_guard<std::mutex> lock(print);
+        const auto& m = r.metrics;
+        std::fprintf(stderr, "%s[%d/%zu] %s: occlusion %.1f s, collisions %d, compute median %.1f ms\n",
+                     o.progress_label.c_str(), ++done, scenarios.size(), m.scenario.c_str(), m.occlusion_time_s,
+                     m.collisions, m.compute_ms.median);
+      } catch (const std::exception& e) {
+        const std::lock_guard<std::mutex> lock(print);
+        if (failure.empty()) failure = scenarios[i].name + ": " + e.what();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(scenarios.size())));
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (!failure.empty()) throw std::runtime_error(failure);
+  return sim::summarize_suite(suite.name, o.planner, metrics);
+}
+
+}  // namespace occtrack::app
