@@ -86,8 +86,8 @@ void generate_suite(const sim::SuiteSpec& spec, const std::filesystem::path& roo
   Summary summary;
   for (std::size_t w = 0; w < spec.worlds.size(); ++w) {
     const sim::SuiteWorld& world_spec = spec.worlds[w];
-    const core::Scenario world = sim::generate_world(world_spec.settings, world_spec.seed);
-    for (int e = 1; e <= spec.episodes_per_world; ++e) {
+    const core::Scenario world = sim::suite_world(world_spec);
+    for (int e = 1; e <= spec.episodes_of(w); ++e) {
       const std::string name = world_spec.name + "-" + std::to_string(e);
       const core::Scenario s =
           sim::generate_episode(world, spec.target, spec.episode_seed(static_cast<int>(w), e), name);
@@ -106,11 +106,13 @@ int run_suites(const Options& o) {
   std::vector<sim::SuiteSpec> suites;
   if (o.suite == "all") {
     suites = sim::benchmark_suites();
+    for (sim::SuiteSpec& spec : sim::benchmark_suites_v2()) suites.push_back(std::move(spec));
   } else if (auto spec = sim::find_suite(o.suite)) {
     suites.push_back(*spec);
   } else {
     std::string names;
     for (const sim::SuiteSpec& s : sim::benchmark_suites()) names += " " + s.name;
+    for (const sim::SuiteSpec& s : sim::benchmark_suites_v2()) names += " " + s.name;
     std::cerr << "occtrack scenario generate: --suite: unknown suite '" << o.suite << "'; one of:" << names
               << " all\n";
     return kExitInputError;
@@ -118,7 +120,10 @@ int run_suites(const Options& o) {
   Summary total;
   for (sim::SuiteSpec& spec : suites) {
     if (o.seed) spec.episode_seed_base = *o.seed;
-    if (o.episodes) spec.episodes_per_world = *o.episodes;
+    if (o.episodes) {
+      spec.episodes_per_world = *o.episodes;
+      for (sim::SuiteWorld& w : spec.worlds) w.episodes = 0;
+    }
     if (o.duration) spec.target.duration = *o.duration;
     generate_suite(spec, o.out, total);
   }
@@ -168,7 +173,8 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
       "benchmark's; generate training data from other seeds");
   CLI::Option* suite = cmd->add_option("--suite", o->suite,
                                        "Suite to write into OUT/<suite>/: static-1ms, static-2ms, dynamic-1.5ms, "
-                                       "their -smoke versions, or all");
+                                       "sixwall-1ms, sixwall-2ms, sixwall-dynamic-1.5ms, random-2ms, clutter-2ms, "
+                                       "clutter-dynamic-2ms, their -smoke versions, or all");
   CLI::Option* kind = cmd->add_option("--kind", o->kind, "One scenario in a new world of this kind")
                           ->check(CLI::IsMember({"forest", "boxes", "mixed"}));
   suite->excludes(kind);

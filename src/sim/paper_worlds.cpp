@@ -3,6 +3,12 @@
 
 #include <cmath>
 
+#include "../core/no_fma.hpp"
+
+// As the generator's files (generator_support.hpp): the sliding walls' path ends are the same on every
+// instruction set.
+OCCTRACK_NO_FMA_CONTRACTION
+
 namespace occtrack::sim {
 
 namespace {

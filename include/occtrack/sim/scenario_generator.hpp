@@ -207,7 +207,15 @@ struct SuiteWorld {
   std::string name;            ///< e.g. "forest-a"; episode files are <name>-<k>.yaml, k = 1, 2, ...
   GeneratorSettings settings;
   std::uint64_t seed = 0;      ///< world seed
+  /// A fixed world (the paper's, sim/paper_worlds.hpp) used instead of generate_world(settings, seed); its
+  /// obstacles are the episodes' (settings and seed are then unused).
+  std::optional<core::Scenario> fixed;
+  /// Episodes of this world; 0: the suite's episodes_per_world (a suite of 10 episodes over 3 worlds).
+  int episodes = 0;
 };
+/// The world's obstacles: `fixed`, or generate_world(settings, seed).
+core::Scenario suite_world(const SuiteWorld& world);
+
 struct SuiteSpec {
   std::string name;            ///< e.g. "static-1ms"; the folder name
   std::vector<SuiteWorld> worlds;
@@ -218,11 +226,19 @@ struct SuiteSpec {
   std::uint64_t episode_seed(int world, int episode) const {
     return episode_seed_base + 20 * static_cast<std::uint64_t>(world) + static_cast<std::uint64_t>(episode);
   }
+  /// Episodes of world w (0-based): its own count, else episodes_per_world.
+  int episodes_of(std::size_t world) const {
+    return worlds[world].episodes > 0 ? worlds[world].episodes : episodes_per_world;
+  }
 };
 
 /// static-1ms, static-2ms, dynamic-1.5ms and their -smoke versions (the same worlds, one 20 s episode per
 /// world), with the seeds documented in scenarios/README.md.
 std::vector<SuiteSpec> benchmark_suites();
+/// The v2 suites of shared/spec/simulation.md ("Suites v2": the paper's worlds and the v1 worlds with
+/// tele-operated targets; 10 episodes of 90 s) and their -smoke versions, seeds in scenarios/README.md.
+std::vector<SuiteSpec> benchmark_suites_v2();
+/// A suite of either list by name.
 std::optional<SuiteSpec> find_suite(std::string_view name);
 
 }  // namespace occtrack::sim
