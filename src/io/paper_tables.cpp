@@ -1,6 +1,7 @@
 #include "occtrack/io/paper_tables.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -12,29 +13,21 @@ namespace occtrack::io {
 
 namespace {
 
-// Fixed notation with `decimals`, "n/a" for a non-finite value.
+// Fixed notation with `decimals` (general, shortest form when decimals < 0: settings as typed, "1", "0.5"),
+// "n/a" for a non-finite value.
 std::string number(double value, int decimals) {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
-  return buffer;
+  char buffer[400];
+  const auto written = decimals < 0 ? std::to_chars(buffer, buffer + sizeof buffer, value)
+                                    : std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed, decimals);
+  return std::isfinite(value) ? std::string(buffer, written.ptr) : "n/a";
 }
+std::string setting(double value) { return number(value, -1); }
 
 // About three significant figures without exponents: latencies range from microseconds (the follower) to
 // hundreds of milliseconds (a slow planner at compute scale 10).
 std::string significant(double value) {
-  if (!std::isfinite(value)) return "n/a";
-  if (value == 0.0) return "0";
-  const int magnitude = static_cast<int>(std::floor(std::log10(std::abs(value))));
+  const int magnitude = value != 0.0 && std::isfinite(value) ? static_cast<int>(std::floor(std::log10(std::abs(value)))) : 2;
   return number(value, std::clamp(2 - magnitude, 0, 4));
-}
-
-// A setting as typed: "1", "10", "0.5".
-std::string setting(double value) {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", value);
-  return buffer;
 }
 
 // Suite names in the order they first appear.
