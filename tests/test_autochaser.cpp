@@ -172,6 +172,17 @@ TEST(AutoChaser, GraphSearchLengthensEdgesForAFastTargetAndReportsTheDeepestLaye
   EXPECT_EQ(partial.waypoints.size(), static_cast<std::size_t>(partial.layers_reached));
 }
 
+TEST(AutoChaser, ARobotInsideAnObstacleOnTheMapCanStillLeaveIt) {
+  const core::Scenario s = wall_world();
+  const AutoChaserSettings settings;
+  const ac::DistanceField field(s, settings.field_resolution, settings.field_truncation);
+  const Vec2 robot(1.5, 0.9);  // inside the wall, near its upper end
+  ASSERT_LT(field.at(robot), 0.0);
+  const std::vector<ac::Layer> layers(2, ac::make_layer(field, settings, {0.0, 0.0}));
+  const ac::ViewpointPath path = ac::search_viewpoints(field, settings, robot, layers, 1.4);
+  EXPECT_EQ(path.layers_reached, 2);
+}
+
 namespace {
 
 /// The unconstrained minimum-jerk path with the soft waypoint pull, computed independently of the planner:

@@ -39,6 +39,7 @@ bool AutoChaserSettings::validate(std::string* error) const {
   c.positive(accel_max, "accel_max");
   c.positive(command_window, "command_window");
   c.non_negative(replan_period, "replan_period");
+  c.non_negative(follow_tolerance, "follow_tolerance");
   c.require(plan_points >= 2, "plan_points (", plan_points, ") must be at least 2");
   return c.done(error);
 }
@@ -51,7 +52,7 @@ struct AutoChaser::Impl {
   std::vector<autochaser::Layer> layers;
   autochaser::ViewpointPath viewpoints;
   autochaser::SmoothPath path;
-  bool holding = false;       // path is a usable plan started at path_start (replan_period > 0)
+  bool have_path = false;     // path is the last smooth path, started at path_start
   double path_start = 0.0;
   bool have_previous = false;  // the last cycle's robot velocity, for the start acceleration
   double previous_time = 0.0;
@@ -70,7 +71,7 @@ std::string AutoChaser::name() const {
 
 void AutoChaser::reset() {
   impl_->record.valid = false;
-  impl_->holding = false;
+  impl_->have_path = false;
   impl_->have_previous = false;
   impl_->viewpoints = {};
 }
@@ -140,14 +141,16 @@ void AutoChaser::plan(const PlannerInput& input, PlannerOutput& out) {
   m.previous_velocity = input.robot_velocity;
 
   // Hold mode (replan_period > 0, the original's 2.9 s): follow the held path until it is due.
-  if (m.holding && input.time - m.path_start < s.replan_period &&
-      input.time - m.path_start + s.command_window <= m.path.duration()) {
+  // The last smooth path at this time, when there is one and it lasts beyond the command window.
+  const auto follow_last_path = [&] {
     const double t0 = input.time - m.path_start;
+    if (!m.have_path || t0 < 0.0 || t0 + s.command_window > m.path.duration()) return false;
     out.command_velocity = path_command(m.path, t0, input.robot_velocity, s);
     fill_plan(m.path, t0, s.plan_points, out.plan);
-    return detail::finish(out, clock);
-  }
-  m.holding = false;
+    detail::finish(out, clock);
+    return true;
+  };
+  if (s.replan_period > 0.0 && input.time - m.path_start < s.replan_period && follow_last_path()) return;
 
   // Target prediction at the layers' times l H / L.
   const int L = s.layers;
@@ -166,15 +169,38 @@ void AutoChaser::plan(const PlannerInput& input, PlannerOutput& out) {
     m.layers[l - 1] = autochaser::make_layer(m.field, s, target);
   }
   m.viewpoints = autochaser::search_viewpoints(m.field, s, input.robot_position, m.layers, spacing);
-  if (m.viewpoints.layers_reached == 0)
-    return detail::brake(out, m.record, clock, "autochaser: no viewpoint of the first layer is reachable");
+  if (m.viewpoints.layers_reached == 0) {
+    // No viewpoint within reach of an edge (a target far ahead, e.g. predicted from a stale estimate): head
+    // for the best of those in clear straight line, at whatever distance; the command's speed cap applies.
+    AutoChaserSettings unlimited = s;
+    unlimited.connect_distance = std::numeric_limits<double>::infinity();
+    m.viewpoints = autochaser::search_viewpoints(m.field, unlimited, input.robot_position, m.layers, spacing);
+  }
+  if (m.viewpoints.layers_reached == 0) {
+    // No visible, reachable viewpoint at all (the predicted target near an obstacle, or the robot boxed in):
+    // keep to the last path while it lasts, as the original does between replans; brake after that.
+    const char* why = "autochaser: no viewpoint of the first layer is reachable";
+    out.message = std::string(why) + "; following the last path";
+    if (follow_last_path()) return;
+    return detail::brake(out, m.record, clock, why);
+  }
 
+  // The start velocity and acceleration: the last path's at this time while the robot keeps close to it
+  // (within follow_tolerance), so that a robot that lags its command (tau) does not drag every new path
+  // down to its own lagging state; the measured ones otherwise.
+  Vec2 velocity = input.robot_velocity;
+  const double t_last = input.time - m.path_start;
+  if (m.have_path && t_last >= 0.0 && t_last <= m.path.duration() &&
+      (m.path.derivative(t_last, 1) - velocity).norm() < s.follow_tolerance) {
+    velocity = m.path.derivative(t_last, 1);
+    acceleration = m.path.derivative(t_last, 2);
+  }
   std::string error;
-  if (autochaser::smooth_path(s, input.robot_position, input.robot_velocity, acceleration, m.viewpoints.waypoints,
+  if (autochaser::smooth_path(s, input.robot_position, velocity, acceleration, m.viewpoints.waypoints,
                               spacing, m.path, &error)) {
     out.command_velocity = path_command(m.path, 0.0, input.robot_velocity, s);
     fill_plan(m.path, 0.0, s.plan_points, out.plan);
-    m.holding = s.replan_period > 0.0;
+    m.have_path = true;
     m.path_start = input.time;
   } else {
     // No smooth path: head straight for the first viewpoint, reaching it at its layer's time.
@@ -187,6 +213,7 @@ void AutoChaser::plan(const PlannerInput& input, PlannerOutput& out) {
     out.command_velocity = path_command(line, 0.0, input.robot_velocity, s);
     fill_plan(line, 0.0, s.plan_points, out.plan);
     out.message = "autochaser: " + error + "; heading straight for the first viewpoint";
+    m.have_path = false;
   }
   // The viewpoints, robot first, for figures.
   out.candidates.resize(1);

@@ -102,8 +102,10 @@ ViewpointPath search_once(const DistanceField& field, const AutoChaserSettings& 
            s.distance_weight * std::abs((b - target).norm() - s.distance_desired);
   };
   // Edges leaving the robot need clearance r_safe only as far as the robot has it itself (half its own
-  // clearance when it is closer): a robot near a wall may still move away from it.
-  const double robot_clearance = std::min(s.safe_radius, 0.5 * field.at(robot));
+  // clearance when it is closer; inside an obstacle, as the map has it, half as deep again): a robot near or
+  // in an obstacle may still move away from it.
+  const double own = field.at(robot);
+  const double robot_clearance = std::min(s.safe_radius, own - 0.5 * std::abs(own));
   for (int l = 0; l < L; ++l) {
     const Layer& layer = layers[l];
     cost[l].assign(layer.cells.size(), kInfinity);
