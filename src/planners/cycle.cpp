@@ -38,13 +38,8 @@ void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, cons
 
 bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& record, const CycleClock& clock) {
   if (!std::isinf(input.target_age)) return false;
-  out.ok = true;
-  out.message = "target not observed yet: holding still";
-  out.command_velocity.setZero();
-  out.plan.clear();
-  out.candidates.clear();
-  record.valid = false;
-  finish(out, clock);
+  brake(out, record, clock, "target not observed yet: holding still");
+  out.ok = true;  // standing still is the plan here, not a failure
   return true;
 }
 
