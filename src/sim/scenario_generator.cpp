@@ -123,6 +123,8 @@ bool TargetSettings::validate(std::string* error) const {
     c.non_negative(s.yaw_noise, "teleop.yaw_noise");
     c.positive(s.yaw_noise_time, "teleop.yaw_noise_time");
     c.positive(s.yaw_rate_max, "teleop.yaw_rate_max");
+    c.non_negative(s.turn_bias, "teleop.turn_bias");
+    c.positive(s.turn_flip_time, "teleop.turn_flip_time");
     c.share(s.strafe_share, "teleop.strafe_share");
     c.require(s.strafe_share < 1.0, "teleop.strafe_share (", s.strafe_share, ") must be less than 1");
     positive_range(c, s.strafe_min, s.strafe_max, "teleop.strafe_min", "teleop.strafe_max");
@@ -131,6 +133,7 @@ bool TargetSettings::validate(std::string* error) const {
     c.require(s.stop_share < 1.0, "teleop.stop_share (", s.stop_share, ") must be less than 1");
     positive_range(c, s.stop_min, s.stop_max, "teleop.stop_min", "teleop.stop_max");
     positive_range(c, s.goal_gap_min, s.goal_gap_max, "teleop.goal_gap_min", "teleop.goal_gap_max");
+    c.share(s.loop_share, "teleop.loop_share");
   }
   return c.done(error);
 }

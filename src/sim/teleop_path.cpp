@@ -57,6 +57,8 @@ struct Driver {
   double sideways = 0.0;
   double yaw_rate = 0.0;
   double yaw_noise = 0.0;        // rad/s, the mean-reverting part of the yaw rate
+  double turn_sign = 1.0;        // +1 or -1: the way the steady turn (TeleopStyle::turn_bias) goes
+  double next_flip = 0.0;        // s, when it flips
   double next_command = 0.0;     // s, times of the next command update, strafe, stop
   double strafe_until = 0.0;
   double next_strafe = 0.0;
@@ -68,11 +70,14 @@ struct Driver {
   int goal_obstacle = -1;        // static obstacle the goal lies beside (-1: none)
   double goal_angle = 0.0;       // rad, direction of the goal from that obstacle's centre
   double loop_sense = 1.0;       // +1 or -1: the way round the obstacle
+  double veer = 0.0;             // +1 or -1 while a correction holds the yaw rate at its largest (one step)
 };
 
-// How the operator corrects a step that would break a clearance, mildest first; each includes the ones before.
-enum class Correction { none, end_strafe, steer, slow, halt };
-constexpr Correction kCorrections[] = {Correction::none, Correction::end_strafe, Correction::steer, Correction::slow,
+// How the operator corrects a step that would break a clearance, mildest first; each includes the ones before
+// (veer: steering without the noise, the yaw rate at its largest one way or the other for this step).
+enum class Correction { none, end_strafe, steer, veer_toward, veer_away, slow, halt };
+constexpr Correction kCorrections[] = {Correction::none,       Correction::end_strafe, Correction::steer,
+                                       Correction::veer_toward, Correction::veer_away, Correction::slow,
                                        Correction::halt};
 
 class TeleopMaker {
@@ -83,7 +88,6 @@ class TeleopMaker {
   static constexpr double kCell = 0.1;
   static constexpr double kLookahead = 0.6;       // s of motion ahead that should stay clear of static obstacles
   static constexpr double kMovingLookahead = 1.0;  // s, the same for moving obstacles (preferred, not required)
-  static constexpr double kLoopShare = 0.5;        // share of goals that continue round the same obstacle
 
   TeleopMaker(const core::Scenario& world, const TargetSettings& t, std::uint64_t seed)
       : t_(t),
@@ -112,7 +116,9 @@ class TeleopMaker {
     s.target_radius = t_.target_radius;
     s.sensor = t_.sensor;
     s.target.reserve(states.size());
-    for (std::size_t k = 0; k < states.size(); ++k) s.target.push_back({time_of(static_cast<int>(k)), states[k].position});
+    // Times rounded as positions are, so that the file reads 0.3, not 0.30000000000000004.
+    for (std::size_t k = 0; k < states.size(); ++k)
+      s.target.push_back({round_to(time_of(static_cast<int>(k)), t_.decimals), states[k].position});
     s.robot_position = robot_start;
     s.robot_velocity = Vec2::Zero();
     return s;
@@ -210,12 +216,12 @@ class TeleopMaker {
     const int samples = std::max(1, static_cast<int>(std::ceil((t1 - t0) / 0.025 - 1e-9)));
     for (int i = 0; i <= samples; ++i) {
       const double alpha = static_cast<double>(i) / samples;
-      const Vec2 p = a + alpha * (b - a);
+      Shape disk;  // the target; shape_gap, as moving obstacles may be boxes (the six-wall world's sliding walls)
+      disk.center = a + alpha * (b - a);
+      disk.radius = t_.target_radius;
       const std::vector<Shape>& shapes = world_.shapes_at(t0 + alpha * (t1 - t0));
-      for (const std::size_t k : moving_index_) {
-        const Shape& m = shapes[k];
-        if ((p - m.center).norm() - m.radius - t_.target_radius < t_.moving_clearance + extra) return false;
-      }
+      for (const std::size_t k : moving_index_)
+        if (shape_gap(shapes[k], disk) < t_.moving_clearance + extra) return false;
     }
     return true;
   }
@@ -251,7 +257,7 @@ class TeleopMaker {
       int obstacle = -1;
       double angle = 0.0, sense = d.loop_sense;
       Vec2 g;
-      if (attempt < 200 && d.goal_obstacle >= 0 && rng_.chance(kLoopShare)) {
+      if (attempt < 200 && d.goal_obstacle >= 0 && rng_.chance(s_.loop_share)) {
         obstacle = d.goal_obstacle;
         angle = d.goal_angle + sense * rng_.uniform(0.8, 1.8);
         g = beside(static_cast<std::size_t>(obstacle), angle, gap);
@@ -264,6 +270,10 @@ class TeleopMaker {
         g = d.position + rng_.uniform(3.0, 10.0) * direction(rng_.uniform(-kPi, kPi));
       }
       if (!goal_usable(g, d.position)) continue;
+      // Ahead at first (within 90 degrees of the way the target moves): turning back on the spot is rare.
+      const Vec2 to = g - d.position;
+      if (attempt < 150 && wrap_angle(std::atan2(to.y(), to.x()) - course(d)) * 2.0 > kPi) continue;
+      if (attempt < 150 && wrap_angle(std::atan2(to.y(), to.x()) - course(d)) * 2.0 < -kPi) continue;
       std::vector<Vec2> route = free_space_.route(local(d.position), local(g));
       if (route.empty()) continue;
       double length = 0.0;
@@ -281,6 +291,12 @@ class TeleopMaker {
     }
     return false;
   }
+
+  // The direction of motion the commands give (body heading plus the strafe's angle).
+  static double slip(const Driver& d) {
+    return (d.forward > 0.0 || d.sideways != 0.0) ? std::atan2(d.sideways, d.forward) : 0.0;
+  }
+  static double course(const Driver& d) { return d.yaw + slip(d); }
 
   // A fresh route to the current goal (after straying from the route).
   bool reroute(Driver& d) {
@@ -306,7 +322,7 @@ class TeleopMaker {
   double wanted_course(const Driver& d) const {
     const std::vector<Vec2>& route = *d.route;
     std::size_t j = d.route_index;
-    const double lookahead = 0.5 + 0.6 * nominal();
+    const double lookahead = 1.0 + 0.6 * nominal();
     for (double along = 0.0; j + 1 < route.size() && along < lookahead; ++j) along += (route[j + 1] - route[j]).norm();
     const Vec2 to = route[j] - d.position;
     return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : d.yaw;
@@ -341,23 +357,30 @@ class TeleopMaker {
     d.forward = std::clamp(s_.forward_mean + fa * (d.forward - s_.forward_mean) +
                                s_.forward_noise * std::sqrt(1.0 - fa * fa) * rng_.normal(),
                            0.0, 1.0);
+    if (now >= d.next_flip) {
+      d.turn_sign = -d.turn_sign;
+      d.next_flip = now + exponential(s_.turn_flip_time);
+    }
     const double ya = std::exp(-period / s_.yaw_noise_time);
     d.yaw_noise = ya * d.yaw_noise + s_.yaw_noise * std::sqrt(1.0 - ya * ya) * rng_.normal();
     steer(d);
   }
 
-  // Yaw rate turning the direction of motion (body heading plus the strafe's angle) towards the route.
+  // Yaw rate turning the body towards the route.
   void steer(Driver& d) const {
-    const double slip = (d.forward > 0.0 || d.sideways != 0.0) ? std::atan2(d.sideways, d.forward) : 0.0;
-    const double error = wrap_angle(wanted_course(d) - slip - d.yaw);
-    d.yaw_rate = std::clamp(s_.yaw_gain * error + d.yaw_noise, -s_.yaw_rate_max, s_.yaw_rate_max);
+    // The operator points the body along the route; a strafe carries the target off it sideways for a while
+    // (the route following catches up), as a joystick operator strafing past a wall does.
+    const double error = wrap_angle(wanted_course(d) - d.yaw);
+    d.yaw_rate = d.veer != 0.0 ? d.veer * 2.0 * s_.yaw_rate_max  // an evasive turn: twice the usual largest
+                               : std::clamp(s_.yaw_gain * error + d.yaw_noise + d.turn_sign * s_.turn_bias,
+                                            -s_.yaw_rate_max, s_.yaw_rate_max);
   }
 
-  // Moves the body for `tau` seconds at the current commands.
-  void move(Driver& d, Vec2& p, double now, double tau) const {
+  // Moves the body for `tau` seconds at the current commands, their speeds times `ease`.
+  void move(Driver& d, Vec2& p, double now, double tau, double ease) const {
     if (now >= d.stop_until) {
       const double mid = d.yaw + 0.5 * d.yaw_rate * tau;
-      const Vec2 body(d.forward * nominal(), d.sideways * nominal());
+      const Vec2 body(ease * d.forward * nominal(), ease * d.sideways * nominal());
       const Vec2 ahead = direction(mid), left(-ahead.y(), ahead.x());
       p += tau * (body.x() * ahead + body.y() * left);
     }
@@ -375,19 +398,26 @@ class TeleopMaker {
       d.next_strafe = t + exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
     }
     if (c >= Correction::steer) d.yaw_noise = 0.0;
-    if (c >= Correction::slow) d.forward *= 0.5;
+    if (c == Correction::veer_toward || c == Correction::veer_away) {
+      // Towards the route first, then the other way.
+      const double toward = wrap_angle(wanted_course(d) - d.yaw) >= 0.0 ? 1.0 : -1.0;
+      d.veer = c == Correction::veer_toward ? toward : -toward;
+    }
     if (c >= Correction::halt) d.stop_until = std::max(d.stop_until, t_next);
     if (c != Correction::none) steer(d);
+    // Slowing holds for this step only: the operator eases off the stick while a wall is close ahead.
+    const double ease = c >= Correction::slow ? 0.5 : 1.0;
     Vec2 p = d.position;
     double now = t;
     while (d.next_command <= t_next) {
-      move(d, p, now, d.next_command - now);
+      move(d, p, now, d.next_command - now, ease);
       const double period = rng_.uniform(s_.command_period_min, s_.command_period_max);
       now = d.next_command;
       d.next_command += period;
       update_commands(d, now, period);
     }
-    move(d, p, now, t_next - now);
+    move(d, p, now, t_next - now, ease);
+    d.veer = 0.0;
     d.position = round_to(p, t_.decimals);
   }
 
@@ -439,6 +469,8 @@ class TeleopMaker {
       d.next_command = rng_.uniform(s_.command_period_min, s_.command_period_max);
       d.next_strafe = exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
       d.next_stop = exponential(mean_gap(s_.stop_share, 0.5 * (s_.stop_min + s_.stop_max)));
+      d.turn_sign = rng_.chance(0.5) ? 1.0 : -1.0;
+      d.next_flip = exponential(s_.turn_flip_time);
       steer(d);
       return d;
     }
@@ -489,35 +521,41 @@ class TeleopMaker {
 // The calm style of the 0.5 m/s recording and the wild one of the 1 m/s recording.
 TeleopStyle calm_style() {
   TeleopStyle s;
-  s.forward_mean = 0.92;
-  s.forward_noise = 0.1;
+  s.forward_mean = 0.97;
+  s.forward_noise = 0.022;
   s.forward_time = 2.0;
-  s.yaw_gain = 1.0;
-  s.yaw_noise = 0.25;
-  s.yaw_noise_time = 1.0;
-  s.yaw_rate_max = 1.5;
-  s.strafe_share = 0.01;
-  s.strafe_min = 0.3;
-  s.strafe_max = 1.0;
-  s.strafe_speed_min = 0.5;
-  s.strafe_speed_max = 1.0;
+  s.yaw_gain = 0.55;
+  s.yaw_noise = 0.09;
+  s.yaw_noise_time = 5.4;
+  s.yaw_rate_max = 1.8;
+  s.turn_bias = 0.13;
+  s.turn_flip_time = 1.5;
+  s.strafe_share = 0.03;
+  s.strafe_min = 0.25;
+  s.strafe_max = 1.08;
+  s.strafe_speed_min = 0.51;
+  s.strafe_speed_max = 0.76;
+  s.goal_gap_min = 1.07;
+  s.goal_gap_max = 1.51;
+  s.loop_share = 1.0;
   return s;
 }
 
 TeleopStyle wild_style() {
   TeleopStyle s;
-  s.forward_mean = 0.95;
-  s.forward_noise = 0.15;
-  s.forward_time = 1.0;
+  s.forward_mean = 1.0;
+  s.forward_noise = 0.03;
+  s.forward_time = 2.0;
   s.yaw_gain = 2.5;
-  s.yaw_noise = 0.8;
+  s.yaw_noise = 0.6;
   s.yaw_noise_time = 0.4;
   s.yaw_rate_max = 3.0;
   s.strafe_share = 0.38;
-  s.strafe_min = 0.4;
-  s.strafe_max = 1.2;
-  s.strafe_speed_min = 0.6;
+  s.strafe_min = 0.3;
+  s.strafe_max = 1.1;
+  s.strafe_speed_min = 0.7;
   s.strafe_speed_max = 1.0;
+  s.loop_share = 0.5;
   return s;
 }
 
@@ -553,6 +591,9 @@ TargetSettings teleop_target_settings(double nominal_speed) {
   s.stop_max = lerp(calm.stop_max, wild.stop_max, x);
   s.goal_gap_min = lerp(calm.goal_gap_min, wild.goal_gap_min, x);
   s.goal_gap_max = lerp(calm.goal_gap_max, wild.goal_gap_max, x);
+  s.loop_share = lerp(calm.loop_share, wild.loop_share, x);
+  s.turn_bias = lerp(calm.turn_bias, wild.turn_bias, x);
+  s.turn_flip_time = lerp(calm.turn_flip_time, wild.turn_flip_time, x);
   return t;
 }
 

@@ -108,6 +108,10 @@ struct TeleopStyle {
   double yaw_noise = 0.5;            ///< rad/s, stationary standard deviation of the yaw-rate noise
   double yaw_noise_time = 0.5;       ///< s, reversion time of the yaw-rate noise
   double yaw_rate_max = 3.0;         ///< rad/s, largest yaw-rate command
+  /// rad/s, a steady turn the operator holds on top of steering, one way or the other (the recorded operator
+  /// turns 90 % of the time, at a steady rate); its sign flips after waits of mean turn_flip_time seconds
+  double turn_bias = 0.0;
+  double turn_flip_time = 5.0;
   double strafe_share = 0.1;         ///< share of the time spent strafing (sideways stick held)
   double strafe_min = 0.3;           ///< s, length of a strafe, drawn in [min, max]
   double strafe_max = 1.5;
@@ -118,6 +122,7 @@ struct TeleopStyle {
   double stop_max = 1.5;
   double goal_gap_min = 1.0;         ///< m, goals lie this far from an obstacle's surface, drawn in [min, max]
   double goal_gap_max = 2.0;
+  double loop_share = 0.5;            ///< share of goals that continue round the same obstacle (loops)
 
   bool operator==(const TeleopStyle&) const = default;
 };
