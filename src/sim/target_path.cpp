@@ -23,6 +23,7 @@
 #include "../core/no_fma.hpp"
 #include "free_space.hpp"
 #include "generator_support.hpp"
+#include "target_checks.hpp"
 #include "teleop_path.hpp"
 #include "occtrack/sim/geometry.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
@@ -73,16 +74,12 @@ class EpisodeMaker {
   EpisodeMaker(const core::Scenario& world, const TargetSettings& t, std::uint64_t seed)
       : t_(t),
         rng_(seed),
-        world_(with_dummy_target(world)),
-        statics_(static_shapes(world)),
-        half_w_(0.5 * t.area_width - t.area_margin),
-        half_h_(0.5 * t.area_height - t.area_margin),
-        free_space_(statics_, half_w_, half_h_, t.target_radius + t.static_clearance, kRouteMargin, kCell) {
-    for (std::size_t k = 0; k < world.obstacles.size(); ++k)
-      if (world.obstacles[k].moving()) {
-        moving_index_.push_back(k);
-        moving_paths_.push_back(world.obstacles[k].path);
-      }
+        checks_(world, t_),
+        half_w_(checks_.half_w()),
+        half_h_(checks_.half_h()),
+        free_space_(checks_.statics(), half_w_, half_h_, t.target_radius + t.static_clearance, kRouteMargin, kCell) {
+    for (const core::ObstacleSpec& o : world.obstacles)
+      if (o.moving()) moving_paths_.push_back(o.path);
     steps_ = static_cast<int>(std::ceil(t.duration / t.waypoint_period - 1e-9));
   }
 
@@ -105,20 +102,6 @@ class EpisodeMaker {
   }
 
  private:
-  static core::Scenario with_dummy_target(const core::Scenario& world) {
-    core::Scenario s = world;
-    s.duration = 1.0;
-    s.target = {{0.0, Vec2::Zero()}};
-    return s;
-  }
-
-  static std::vector<Shape> static_shapes(const core::Scenario& world) {
-    std::vector<Shape> shapes;
-    for (const core::ObstacleSpec& o : world.obstacles)
-      if (!o.moving()) shapes.push_back(shape_of(o));
-    return shapes;
-  }
-
   double time_of(int k) const { return k * t_.waypoint_period; }
 
   // The operator's states at every waypoint, and the robot's start: steps forward, backs up at dead ends
@@ -159,36 +142,11 @@ class EpisodeMaker {
     }
   }
 
-  // --- Constraints.
+  // --- Constraints (src/sim/target_checks.hpp).
 
-  // Gap between the target's disk swept along a-b and the static obstacles (exact), and the area.
-  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const {
-    if (!inside_area(a, half_w_ - extra, half_h_ - extra) || !inside_area(b, half_w_ - extra, half_h_ - extra))
-      return false;
-    const double need = t_.target_radius + t_.static_clearance + extra + 1e-6;
-    const double reach = (b - a).norm();
-    for (const Shape& s : statics_) {
-      if ((s.center - a).norm() - bounding_radius(s) - reach > need) continue;
-      if (segment_gap(s, a, b) < need) return false;
-    }
-    return true;
-  }
-
-  // Gap to the moving obstacles while the target goes from a (time t0) to b (time t1), checked every
-  // 0.025 s (the tests check every 0.05 s).
+  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const { return checks_.static_clear(a, b, extra); }
   bool moving_clear(const Vec2& a, const Vec2& b, double t0, double t1, double extra = 0.0) {
-    if (moving_index_.empty()) return true;
-    const int samples = std::max(1, static_cast<int>(std::ceil((t1 - t0) / 0.025 - 1e-9)));
-    for (int i = 0; i <= samples; ++i) {
-      const double alpha = static_cast<double>(i) / samples;
-      const Vec2 p = a + alpha * (b - a);
-      const std::vector<Shape>& shapes = world_.shapes_at(t0 + alpha * (t1 - t0));
-      for (const std::size_t k : moving_index_) {
-        const Shape& m = shapes[k];
-        if ((p - m.center).norm() - m.radius - t_.target_radius < t_.moving_clearance + extra) return false;
-      }
-    }
-    return true;
+    return checks_.moving_clear(a, b, t0, t1, extra);
   }
 
   // --- The operator's intentions.
@@ -294,33 +252,15 @@ class EpisodeMaker {
     throw std::runtime_error("generate_episode: found no free start for the target and the robot");
   }
 
-  Vec2 robot_behind(const Vec2& target, double heading) const {
-    return round_to(target - t_.robot_distance * direction(heading), t_.decimals);
-  }
+  Vec2 robot_behind(const Vec2& target, double heading) const { return checks_.robot_behind(target, heading); }
+  bool robot_fits(const Vec2& robot, const Vec2& target) { return checks_.robot_fits(robot, target); }
 
-  // Inside the area, clear of every obstacle by robot_clearance at t = 0, and seeing the target.
-  bool robot_fits(const Vec2& robot, const Vec2& target) {
-    const double half_w = 0.5 * t_.area_width - t_.robot_radius, half_h = 0.5 * t_.area_height - t_.robot_radius;
-    return inside_area(robot, half_w, half_h) &&
-           world_.clearance(robot, 0.0) >= t_.robot_radius + t_.robot_clearance &&
-           !world_.segment_blocked(robot, target, 0.0);
-  }
-
-  // The robot starts robot_distance behind the target, opposite the way the target first moves (turned by
-  // up to 0.6 rad when the spot straight behind is taken); false when no such spot fits.
+  // The robot starts robot_distance behind the target, opposite the way the target first moves.
   bool place_robot(const std::vector<Operator>& states, Vec2& robot) {
-    const Vec2 start = states.front().position;
-    double heading = states.front().heading;
-    for (const Operator& o : states)
-      if ((o.position - start).norm() >= 0.5) {
-        heading = std::atan2(o.position.y() - start.y(), o.position.x() - start.x());
-        break;
-      }
-    for (const double turn : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5, -0.5, 0.6, -0.6}) {
-      robot = robot_behind(start, heading + turn);
-      if (robot_fits(robot, start)) return true;
-    }
-    return false;
+    std::vector<Vec2> path;
+    path.reserve(states.size());
+    for (const Operator& o : states) path.push_back(o.position);
+    return checks_.place_robot(path, states.front().heading, robot);
   }
 
   // --- One step.
@@ -454,12 +394,10 @@ class EpisodeMaker {
 
   TargetSettings t_;
   Random rng_;
-  World world_;
-  std::vector<Shape> statics_;
+  generator::TargetChecks checks_;
   double half_w_ = 0.0, half_h_ = 0.0;
   FreeSpace free_space_;
   std::vector<std::vector<Vec2>> moving_paths_;
-  std::vector<std::size_t> moving_index_;
   int steps_ = 0;
 };
 

@@ -30,6 +30,7 @@
 #include "../core/no_fma.hpp"
 #include "free_space.hpp"
 #include "generator_support.hpp"
+#include "target_checks.hpp"
 #include "occtrack/sim/geometry.hpp"
 #include "occtrack/sim/world.hpp"
 
@@ -93,15 +94,13 @@ class TeleopMaker {
       : t_(t),
         s_(t.teleop),
         rng_(seed),
-        world_(with_dummy_target(world)),
-        statics_(static_shapes(world, Vec2::Zero())),
+        checks_(world, t_),
+        statics_(checks_.statics()),
         center_(t.area_center_x, t.area_center_y),
-        half_w_(0.5 * t.area_width - t.area_margin),
-        half_h_(0.5 * t.area_height - t.area_margin),
-        free_space_(static_shapes(world, -center_), half_w_, half_h_, t.target_radius + t.static_clearance,
-                    kRouteMargin, kCell) {
-    for (std::size_t k = 0; k < world.obstacles.size(); ++k)
-      if (world.obstacles[k].moving()) moving_index_.push_back(k);
+        half_w_(checks_.half_w()),
+        half_h_(checks_.half_h()),
+        free_space_(generator::TargetChecks::static_shapes(world, -center_), half_w_, half_h_,
+                    t.target_radius + t.static_clearance, kRouteMargin, kCell) {
     steps_ = static_cast<int>(std::ceil(t.duration / t.waypoint_period - 1e-9));
   }
 
@@ -125,26 +124,8 @@ class TeleopMaker {
   }
 
  private:
-  static core::Scenario with_dummy_target(const core::Scenario& world) {
-    core::Scenario s = world;
-    s.duration = 1.0;
-    s.target = {{0.0, Vec2::Zero()}};
-    return s;
-  }
-
-  static std::vector<Shape> static_shapes(const core::Scenario& world, const Vec2& shift) {
-    std::vector<Shape> shapes;
-    for (const core::ObstacleSpec& o : world.obstacles)
-      if (!o.moving()) {
-        Shape shape = shape_of(o);
-        shape.center += shift;
-        shapes.push_back(shape);
-      }
-    return shapes;
-  }
-
   double time_of(int k) const { return k * t_.waypoint_period; }
-  Vec2 local(const Vec2& p) const { return p - center_; }
+  Vec2 local(const Vec2& p) const { return checks_.local(p); }
   double nominal() const { return t_.max_speed; }
 
   // Exponential wait with the given mean (never, for an infinite mean).
@@ -195,35 +176,11 @@ class TeleopMaker {
     }
   }
 
-  // --- Constraints (the same rules as the smooth generator's).
+  // --- Constraints (src/sim/target_checks.hpp, the same as the smooth generator's).
 
-  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const {
-    if (!inside_area(local(a), half_w_ - extra, half_h_ - extra) ||
-        !inside_area(local(b), half_w_ - extra, half_h_ - extra))
-      return false;
-    const double need = t_.target_radius + t_.static_clearance + extra + 1e-6;
-    const double reach = (b - a).norm();
-    for (const Shape& s : statics_) {
-      if ((s.center - a).norm() - bounding_radius(s) - reach > need) continue;
-      if (segment_gap(s, a, b) < need) return false;
-    }
-    return true;
-  }
-
-  // Checked every 0.025 s along a-b while the target goes from a (time t0) to b (time t1).
+  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const { return checks_.static_clear(a, b, extra); }
   bool moving_clear(const Vec2& a, const Vec2& b, double t0, double t1, double extra = 0.0) {
-    if (moving_index_.empty()) return true;
-    const int samples = std::max(1, static_cast<int>(std::ceil((t1 - t0) / 0.025 - 1e-9)));
-    for (int i = 0; i <= samples; ++i) {
-      const double alpha = static_cast<double>(i) / samples;
-      Shape disk;  // the target; shape_gap, as moving obstacles may be boxes (the six-wall world's sliding walls)
-      disk.center = a + alpha * (b - a);
-      disk.radius = t_.target_radius;
-      const std::vector<Shape>& shapes = world_.shapes_at(t0 + alpha * (t1 - t0));
-      for (const std::size_t k : moving_index_)
-        if (shape_gap(shapes[k], disk) < t_.moving_clearance + extra) return false;
-    }
-    return true;
+    return checks_.moving_clear(a, b, t0, t1, extra);
   }
 
   bool goal_usable(const Vec2& g, const Vec2& from) const {
@@ -477,44 +434,23 @@ class TeleopMaker {
     throw std::runtime_error("generate_episode: found no free start for the target and the robot");
   }
 
-  Vec2 robot_behind(const Vec2& target, double heading) const {
-    return round_to(target - t_.robot_distance * direction(heading), t_.decimals);
-  }
-
-  // Inside the area, clear of every obstacle by robot_clearance at t = 0, and seeing the target.
-  bool robot_fits(const Vec2& robot, const Vec2& target) {
-    const double half_w = 0.5 * t_.area_width - t_.robot_radius, half_h = 0.5 * t_.area_height - t_.robot_radius;
-    return inside_area(local(robot), half_w, half_h) &&
-           world_.clearance(robot, 0.0) >= t_.robot_radius + t_.robot_clearance &&
-           !world_.segment_blocked(robot, target, 0.0);
-  }
-
-  // As the smooth generator: robot_distance behind the target's start, opposite the way it first moves
-  // (turned by up to 0.6 rad when that spot is taken).
+  Vec2 robot_behind(const Vec2& target, double heading) const { return checks_.robot_behind(target, heading); }
+  bool robot_fits(const Vec2& robot, const Vec2& target) { return checks_.robot_fits(robot, target); }
   bool place_robot(const std::vector<Driver>& states, Vec2& robot) {
-    const Vec2 start = states.front().position;
-    double heading = states.front().yaw;
-    for (const Driver& d : states)
-      if ((d.position - start).norm() >= 0.5) {
-        heading = std::atan2(d.position.y() - start.y(), d.position.x() - start.x());
-        break;
-      }
-    for (const double turn : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5, -0.5, 0.6, -0.6}) {
-      robot = robot_behind(start, heading + turn);
-      if (robot_fits(robot, start)) return true;
-    }
-    return false;
+    std::vector<Vec2> path;
+    path.reserve(states.size());
+    for (const Driver& d : states) path.push_back(d.position);
+    return checks_.place_robot(path, states.front().yaw, robot);
   }
 
   TargetSettings t_;
   TeleopStyle s_;
   Random rng_;
-  World world_;
+  generator::TargetChecks checks_;
   std::vector<Shape> statics_;
   Vec2 center_;
   double half_w_ = 0.0, half_h_ = 0.0;
   FreeSpace free_space_;
-  std::vector<std::size_t> moving_index_;
   int steps_ = 0;
 };
 

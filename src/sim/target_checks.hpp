@@ -1,0 +1,57 @@
+// The rules every target path of the scenario generator keeps, and the robot's start (private to src/sim/:
+// target_path.cpp's smooth operator and teleop_path.cpp's joystick operator share them, so both modes keep the
+// same clearances by the same arithmetic). Compiled without fused multiply-adds (generator_support.hpp).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "occtrack/core/scenario.hpp"
+#include "occtrack/sim/geometry.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
+#include "occtrack/sim/world.hpp"
+
+namespace occtrack::sim::generator {
+
+class TargetChecks {
+ public:
+  /// `world`: generate_world's output (or any obstacles-only scenario); its area is the settings' area, around
+  /// (area_center_x, area_center_y).
+  TargetChecks(const core::Scenario& world, const TargetSettings& t);
+
+  /// The static obstacles, shifted by `shift` (FreeSpace wants its area centred on the origin).
+  static std::vector<Shape> static_shapes(const core::Scenario& world, const Vec2& shift = Vec2::Zero());
+
+  const std::vector<Shape>& statics() const { return statics_; }
+  bool has_moving() const { return !moving_index_.empty(); }
+  /// p relative to the area's centre.
+  Vec2 local(const Vec2& p) const { return p - center_; }
+  double half_w() const { return half_w_; }  ///< half the area's width, less area_margin
+  double half_h() const { return half_h_; }
+
+  /// Whether the target's disk swept along a-b keeps static_clearance (+ extra) from every static obstacle
+  /// (exact) and a, b lie inside the area (less extra).
+  bool static_clear(const Vec2& a, const Vec2& b, double extra = 0.0) const;
+  /// Whether the target going from a (time t0) to b (time t1) keeps moving_clearance (+ extra) from every
+  /// moving obstacle, checked every 0.025 s (the tests check every 0.05 s).
+  bool moving_clear(const Vec2& a, const Vec2& b, double t0, double t1, double extra = 0.0);
+
+  /// robot_distance behind `target` against `heading`, rounded.
+  Vec2 robot_behind(const Vec2& target, double heading) const;
+  /// Inside the area, clear of every obstacle by robot_clearance at t = 0, and seeing the target.
+  bool robot_fits(const Vec2& robot, const Vec2& target);
+  /// The robot's start robot_distance behind the target's start, opposite the way the target first moves
+  /// (its first point 0.5 m from the start, else `heading`), turned by up to 0.6 rad when that spot is taken;
+  /// false when none fits.
+  bool place_robot(const std::vector<Vec2>& path, double heading, Vec2& robot);
+
+ private:
+  const TargetSettings& t_;
+  World world_;
+  std::vector<Shape> statics_;
+  std::vector<std::size_t> moving_index_;
+  Vec2 center_;
+  double half_w_, half_h_;
+};
+
+}  // namespace occtrack::sim::generator
