@@ -98,6 +98,8 @@ TEST(PlannerSettings, ProjCemNamesEveryBrokenField) {
       {"projection.iterations", [](P& p) { p.projection.iterations = 0; }},
       {"perception.voxel_size", [](P& p) { p.perception.voxel_size = 0.0; }},
       {"perception.nearest_count", [](P& p) { p.perception.nearest_count = 59; }},  // not the optimizer's 60
+      {"response_time", [](P& p) { p.response_time = -0.1; }},
+      {"response_time", [](P& p) { p.response_time = kNaN; }},
   };
   for (auto& s : ranking_sentinels("ranking.")) sentinels.push_back({s.field, [set = s.set](P& p) { set(p.ranking); }});
   expect_each_sentinel_named(sentinels);
@@ -122,6 +124,7 @@ TEST(PlannerSettings, FollowerNamesEveryBrokenField) {
   std::vector<Sentinel<F>> sentinels = {
       {"projection.steps", [](F& f) { f.projection.steps = 0; }},
       {"projection.speed_max", [](F& f) { f.projection.speed_max = kNaN; }},
+      {"response_time", [](F& f) { f.response_time = 1e3; }},  // beyond the horizon
   };
   for (auto& s : ranking_sentinels("ranking.")) sentinels.push_back({s.field, [set = s.set](F& f) { set(f.ranking); }});
   expect_each_sentinel_named(sentinels);
@@ -138,6 +141,7 @@ TEST(PlannerSettings, LearnedPolicyNamesEveryBrokenFieldBeforeReadingAModel) {
       {"projection.accel_max", [](L& l) { l.projection.accel_max = kNaN; }},
       {"perception.cloud_size", [](L& l) { l.perception.cloud_size = 0; }},
       {"perception.nearest_count", [](L& l) { l.perception.nearest_count = 7; }},
+      {"response_time", [](L& l) { l.response_time = -1.0; }},
   };
   for (auto& s : ranking_sentinels("ranking.")) sentinels.push_back({s.field, [set = s.set](L& l) { set(l.ranking); }});
   expect_each_sentinel_named(sentinels);

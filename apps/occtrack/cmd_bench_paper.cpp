@@ -111,7 +111,8 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       "compute scale and suite before its episodes (not while others run), times the compute scale; then held "
       "fixed",
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
-      "robot response: first-order lag tau 0.25 s",
+      "robot response: first-order lag tau 0.25 s; every planner knows it and leads its command by it "
+      "(response time 0.25 s, docs/protocol_v2.md)",
       "LiDAR: 360 beams, Gaussian range noise sigma 0.01 m, range the scenario's",
       "target estimate: Gaussian noise 0.05 m on position, 0.1 m/s on velocity; target_observation always",
       "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
@@ -169,7 +170,7 @@ int run(const PaperOptions& o) {
   std::vector<const PaperPlanner*> runnable;
   for (const PaperPlanner* p : planners) {
     try {
-      planners::make_planner(p->planner, paper_episode_options(*p, 1.0).planner_options);
+      planners::make_planner(p->planner, paper_episode_options(*p, 1.0).planner_settings());
       runnable.push_back(p);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "occtrack bench paper: skipping %s: %s\n", p->label, e.what());
@@ -193,7 +194,7 @@ int run(const PaperOptions& o) {
           const EpisodeCliOptions episode = paper_episode_options(*p, scale);
           SuiteRunOptions run;
           run.planner = episode.planner;
-          run.planner_options = episode.planner_options;
+          run.planner_options = episode.planner_settings();
           run.settings = resolve_episode_settings(episode, suite.scenarios);  // alone, before the episodes
           run.jobs = o.jobs;
           run.progress_label = "  " + name + " ";

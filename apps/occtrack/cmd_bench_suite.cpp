@@ -24,10 +24,10 @@ struct SuiteOptions {
 
 int run(const SuiteOptions& o) {
   const Suite suite = load_suite(o.suite);                                // refuse bad files up front
-  planners::make_planner(o.episode.planner, o.episode.planner_options);  // and an unknown planner
+  planners::make_planner(o.episode.planner, o.episode.planner_settings());  // and an unknown planner
   SuiteRunOptions run;
   run.planner = o.episode.planner;
-  run.planner_options = o.episode.planner_options;
+  run.planner_options = o.episode.planner_settings();
   run.settings = resolve_episode_settings(o.episode, suite.scenarios);  // before the episodes, not among them
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;

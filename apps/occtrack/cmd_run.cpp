@@ -24,7 +24,7 @@ constexpr const char* kWho = "occtrack run";
 
 int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
-  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_options);
+  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings());
   // --latency auto is measured here, once, before the episode (Protocol v2).
   const sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
   Progress progress(scenario.name + " (" + planner->name() + ")");

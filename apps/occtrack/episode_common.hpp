@@ -108,6 +108,18 @@ struct EpisodeCliOptions {
   std::string beams, lidar_noise, beam_dropout;  ///< overrides of the scenario's sensor; empty: none
   std::string target_noise;                      ///< "POS,VEL"; empty: 0,0
   std::string target_observation = "always";
+  std::string response_time;  ///< the planners' response time (s); empty: the robot's, --tau
+
+  /// The planner options with the response time resolved: a planner is configured for its robot, so by
+  /// default it leads its command by the robot's lag (--tau; 0 in v1). Throws naming --response-time.
+  planners::PlannerOptions planner_settings() const {
+    planners::PlannerOptions p = planner_options;
+    p.response_time = tau;
+    if (!response_time.empty())
+      p.response_time = episode_cli::value("--response-time", response_time,
+                                           episode_cli::check(response_time, 0.0, INFINITY));
+    return p;
+  }
 
   bool latency_auto() const { return latency == "auto"; }
 
@@ -199,6 +211,9 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_option("--target-noise", o.target_noise,
                   "Gaussian noise on the target estimate the planner receives: position (m), velocity (m/s)")
       ->check(e::validator(e::check_noise_pair, "POS,VEL"));
+  cmd->add_option("--response-time", o.response_time,
+                  "Seconds: the robot's velocity lag the planner allows for by leading its command (default: --tau)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"));
   add_choice_option(cmd, "--target-observation", o.target_observation,
                     "always (v1), or line_of_sight: a fresh target estimate only while it is visible and in range, "
                     "else the last one and its age",
@@ -218,7 +233,7 @@ inline sim::EpisodeSettings resolve_episode_settings(
   fixed.latency = "0";
   sim::EpisodeSettings s = fixed.settings();
   if (scenarios.empty()) throw std::invalid_argument("--latency auto: no scenarios to measure the planner on");
-  std::unique_ptr<planners::Planner> planner = make ? make() : planners::make_planner(o.planner, o.planner_options);
+  std::unique_ptr<planners::Planner> planner = make ? make() : planners::make_planner(o.planner, o.planner_settings());
   const double median = sim::median_cycle_ms(*planner, scenarios, s);
   s.latency_ms = median * s.compute_scale;
   std::fprintf(stderr, "latency auto: %.9g ms (median cycle %.9g ms x compute scale %g)\n", *s.latency_ms, median,

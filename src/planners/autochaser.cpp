@@ -39,6 +39,7 @@ bool AutoChaserSettings::validate(std::string* error) const {
   c.positive(accel_max, "accel_max");
   c.positive(command_window, "command_window");
   c.non_negative(replan_period, "replan_period");
+  c.non_negative(response_time, "response_time");
   c.non_negative(follow_tolerance, "follow_tolerance");
   c.require(plan_points >= 2, "plan_points (", plan_points, ") must be at least 2");
   return c.done(error);
@@ -91,9 +92,12 @@ namespace {
 /// the robot's velocity and within speed_max; zero when not finite.
 Vec2 path_command(const autochaser::SmoothPath& path, double t0, const Vec2& robot_velocity,
                   const AutoChaserSettings& s) {
-  Vec2 command = (path.derivative(t0 + s.command_window, 0) - path.derivative(t0, 0)) / s.command_window;
+  // A lagging robot (response time tau) tracks the path when commanded its velocity tau ahead
+  // (docs/protocol_v2.md); tau = 0 is the path's first window.
+  const double lead = std::min(s.response_time, std::max(0.0, path.duration() - t0 - s.command_window));
+  Vec2 command = (path.derivative(t0 + lead + s.command_window, 0) - path.derivative(t0 + lead, 0)) / s.command_window;
   const Vec2 change = command - robot_velocity;
-  const double change_max = s.accel_max * s.command_window;
+  const double change_max = s.accel_max * (s.command_window + s.response_time);
   if (change.norm() > change_max) command = robot_velocity + change * (change_max / change.norm());
   if (command.norm() > s.speed_max) command *= s.speed_max / command.norm();
   return command.allFinite() ? command : Vec2::Zero();

@@ -1,13 +1,14 @@
 #include "cycle.hpp"
 
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace occtrack::planners::detail {
 
 bool validate_cycle(const projection::Settings& projection, const perception::Settings* perception,
-                    const RankingSettings& ranking, std::string* error) {
+                    const RankingSettings& ranking, double response_time, std::string* error) {
   std::string why;
   auto fail = [&](const char* group) {
     if (error) *error = group + why;
@@ -16,6 +17,11 @@ bool validate_cycle(const projection::Settings& projection, const perception::Se
   if (!projection.validate(&why)) return fail("projection.");
   if (perception && !perception->validate(&why)) return fail("perception.");
   if (!ranking.validate(&why)) return fail("ranking.");
+  if (!(std::isfinite(response_time) && response_time >= 0.0 && response_time < projection.horizon)) {
+    if (error)
+      *error = "response_time (" + std::to_string(response_time) + ") must lie in [0, projection.horizon)";
+    return false;
+  }
   if (perception && perception->nearest_count != projection.obstacles) {
     why = "nearest_count (" + std::to_string(perception->nearest_count) + ") must equal projection.obstacles (" +
           std::to_string(projection.obstacles) + ")";
@@ -44,7 +50,7 @@ bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& 
 }
 
 Context::Context(const projection::Settings& projection, const perception::Settings& perception,
-                 const RankingSettings& ranking)
+                 const RankingSettings& ranking, double response_time)
     : projection_(projection), ranking_settings_(ranking), perception_(perception), ranking_(ranking, projection) {
   const int n = projection.coefficients(), m = projection.steps;
   for (Eigen::VectorXd* v : {&cx_, &cy_, &fit_x_, &fit_y_}) v->resize(n);
@@ -52,9 +58,11 @@ Context::Context(const projection::Settings& projection, const perception::Setti
   shifted_.resize(m, 2);
   const double dt = std::min(0.1, projection.horizon);
   command_row_.resize(n);
+  // v1 (response_time 0): the window [0, dt], evaluated exactly as before.
+  const double lead = std::clamp(response_time, 0.0, projection.horizon - dt);
   for (int i = 0; i < n; ++i)
-    command_row_(i) = (core::bernstein(projection.degree, i, dt / projection.horizon) -
-                       core::bernstein(projection.degree, i, 0.0)) / dt;
+    command_row_(i) = (core::bernstein(projection.degree, i, (lead + dt) / projection.horizon) -
+                       core::bernstein(projection.degree, i, lead / projection.horizon)) / dt;
   least_squares_ = basis().P.completeOrthogonalDecomposition().pseudoInverse();
 }
 

@@ -30,7 +30,7 @@ namespace occtrack::planners::detail {
 /// with its group, e.g. "ranking.occlusion_stride (0) must be at least 1". Every planner's settings call it
 /// from their validate().
 bool validate_cycle(const projection::Settings& projection, const perception::Settings* perception,
-                    const RankingSettings& ranking, std::string* error);
+                    const RankingSettings& ranking, double response_time, std::string* error);
 
 /// The optimizer of a planner that projects: factored once, with its problem and result buffers.
 struct Optimizer {
@@ -72,8 +72,9 @@ constexpr double kMaxTargetPrediction = 2.0;
 
 class Context {
  public:
+  /// `response_time`: the robot's velocity time constant (Protocol v2's tau), by which commands lead the plan.
   Context(const projection::Settings& projection, const perception::Settings& perception,
-          const RankingSettings& ranking);
+          const RankingSettings& ranking, double response_time = 0.0);
 
   /// Forgets perception's tracks (velocity estimates); called when an episode starts.
   void reset() { perception_.reset(); }
@@ -103,6 +104,9 @@ class Context {
                 const Eigen::Vector2d* terminal_velocity = nullptr) const;
 
   /// The command of a plan: its mean velocity over the first 0.1 s, capped at speed_max; zero if not finite.
+  /// With a response time tau > 0, the mean over [tau, tau + 0.1 s] instead: a robot whose velocity follows its
+  /// command with lag tau tracks v(t) when commanded about v(t + tau) (v + tau dv/dt), so the plan's
+  /// accelerations, braking included, are realised rather than damped (docs/protocol_v2.md).
   Eigen::Vector2d command(const Eigen::Ref<const Eigen::RowVectorXd>& xi) const;
   /// World-frame positions of a plan, one per step, into `out` (resized to the steps).
   void world_positions(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Frame& frame, std::vector<Vec2>& out) const;

@@ -19,13 +19,19 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
                             : ProjCemSettings{};
     if (options.samples > 0) s.samples = options.samples;
     s.seed = options.seed;
+    s.response_time = options.response_time;
     s.projection.threads = std::max(1, options.threads);
     return std::make_unique<ProjCem>(s);
   }
-  if (name == "follower") return std::make_unique<Follower>();
+  if (name == "follower") {
+    FollowerSettings s;
+    s.response_time = options.response_time;
+    return std::make_unique<Follower>(s);
+  }
   if (name == "autochaser") {
     AutoChaserSettings s;
     s.waypoints = options.waypoints;  // 0: constant-velocity prediction
+    s.response_time = options.response_time;
     return std::make_unique<AutoChaser>(s);
   }
   for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q}) {
@@ -37,6 +43,7 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
     s.keep_last_plan = options.keep_last_plan;
     s.rank_stop = options.rank_stop;
     s.seed = options.seed;
+    s.response_time = options.response_time;
     return std::make_unique<LearnedPolicy>(s);
   }
   std::string known;

@@ -7,7 +7,7 @@
 namespace occtrack::planners {
 
 bool FollowerSettings::validate(std::string* error) const {
-  return detail::validate_cycle(projection, nullptr, ranking, error);
+  return detail::validate_cycle(projection, nullptr, ranking, response_time, error);
 }
 
 struct Follower::Impl {
@@ -17,7 +17,7 @@ struct Follower::Impl {
   Eigen::RowVectorXd line;
 
   explicit Impl(const FollowerSettings& s)
-      : context(occtrack::detail::checked(s, "follower").projection, perception::Settings{}, s.ranking),
+      : context(occtrack::detail::checked(s, "follower").projection, perception::Settings{}, s.ranking, s.response_time),
         optimizer(s.projection) {
     line.resize(2 * s.projection.coefficients());
     record.xi.resize(line.size());

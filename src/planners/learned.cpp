@@ -60,7 +60,7 @@ bool LearnedPolicySettings::validate(std::string* error) const {
   occtrack::detail::SettingsChecker c;
   c.require(batch >= 1, "batch (", batch, ") must be at least 1");
   c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
-  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, error);
+  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, response_time, error);
 }
 
 std::string default_model_path(policy::Variant variant) {
@@ -95,7 +95,7 @@ struct LearnedPolicy::Impl {
   bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
-      : settings(occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant))), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking), rng(s.seed) {
+      : settings(occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant))), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking, s.response_time), rng(s.seed) {
     settings.rank_stop = ranks_stop(s);
     const std::string planner = learned_planner_name(s.variant);
     model.require_variant(s.variant, planner);

@@ -40,7 +40,7 @@ bool ProjCemSettings::validate(std::string* error) const {
   c.non_negative(initial_std, "initial_std");
   c.non_negative(min_std, "min_std");
   c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
-  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, error);
+  return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, response_time, error);
 }
 
 struct ProjCem::Impl {
@@ -60,7 +60,7 @@ struct ProjCem::Impl {
 
   explicit Impl(const ProjCemSettings& s)
       : settings(occtrack::detail::checked(s, "projcem")),
-        context(batch_settings(s), s.perception, s.ranking),
+        context(batch_settings(s), s.perception, s.ranking, s.response_time),
         optimizer(batch_settings(s)),
         rng(s.seed) {
     const int n2 = 2 * s.projection.coefficients();

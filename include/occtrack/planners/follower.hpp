@@ -19,6 +19,8 @@ struct FollowerSettings {
     return s;
   }();
   RankingSettings ranking;  ///< its tracking band sets the goal; the whole ranking scores the plan (PlanRecord)
+  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  double response_time = 0.0;
 
   /// True when the projection (batch 1 is what the follower projects) and ranking settings are valid;
   /// otherwise false, and *error names the field and the rule ("projection.steps ...").

@@ -40,6 +40,8 @@ struct LearnedPolicySettings {
   projection::Settings projection = projection::Settings::with_iterations(50);
   perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
+  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  double response_time = 0.0;
 
   /// True when batch >= 1, candidates_kept >= 0, and projection (with its batch set from the rows ranked),
   /// perception and ranking are valid and agree (perception's nearest points are the optimizer's obstacles).

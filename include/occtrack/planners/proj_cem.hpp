@@ -27,6 +27,8 @@ struct ProjCemSettings {
   projection::Settings projection = projection::Settings::with_iterations(30);
   perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
+  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  double response_time = 0.0;
 
   /// The offline expert: 2000 samples, 4 CEM iterations, 50 projection iterations, on `threads` cores.
   static ProjCemSettings offline_expert(int threads);

@@ -1,0 +1,71 @@
+// A robot whose velocity lags its command (Protocol v2's tau) is commanded the plan's velocity tau ahead
+// (planners' response_time, docs/protocol_v2.md): the command is checked against the chosen plan's own
+// coefficients, and closed loop the lagging robot keeps the clearance the plan promised.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "occtrack/core/bernstein.hpp"
+#include "occtrack/io/scenario.hpp"
+#include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/sim/episode.hpp"
+#include "occtrack/sim/world.hpp"
+
+namespace occtrack {
+namespace {
+
+/// The mean velocity over [t0, t0 + 0.1] of the plan with coefficients xi (x then y; degree 10, horizon 5 s).
+Eigen::Vector2d mean_velocity(const Eigen::RowVectorXd& xi, double t0) {
+  const int n = 11;
+  auto position = [&](double t) {
+    Eigen::Vector2d p = Eigen::Vector2d::Zero();
+    for (int i = 0; i < n; ++i) {
+      const double b = core::bernstein(10, i, t / 5.0);
+      p += b * Eigen::Vector2d(xi(i), xi(n + i));
+    }
+    return p;
+  };
+  return (position(t0 + 0.1) - position(t0)) / 0.1;
+}
+
+planners::PlannerOutput plan_once(planners::Planner& planner, const core::Scenario& scenario) {
+  sim::World world(scenario);
+  std::mt19937_64 rng(1);
+  const core::Scan scan = world.scan(scenario.robot_position, 0.0, rng);
+  planners::PlannerInput input;
+  input.robot_position = scenario.robot_position;
+  input.target_position = world.target_position(0.0);
+  input.target_velocity = world.target_velocity(0.0);
+  input.scan = &scan;
+  return planner.plan(input);
+}
+
+TEST(ResponseTime, TheCommandIsThePlansVelocityTauAhead) {
+  const core::Scenario scenario = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
+  for (double tau : {0.0, 0.25, 0.6}) {
+    SCOPED_TRACE(tau);
+    planners::FollowerSettings s;
+    s.response_time = tau;
+    planners::Follower follower(s);
+    const planners::PlannerOutput out = plan_once(follower, scenario);
+    ASSERT_TRUE(out.ok) << out.message;
+    const Eigen::Vector2d expected = mean_velocity(follower.last_record().xi, tau);
+    ASSERT_LT(expected.norm(), s.projection.speed_max);  // not capped: the lead alone sets the command
+    EXPECT_NEAR((out.command_velocity - expected).norm(), 0.0, 1e-9);
+  }
+  // The robot starts at rest and accelerates: leading the plan asks for more than its first 0.1 s.
+  planners::FollowerSettings lead;
+  lead.response_time = 0.25;
+  planners::Follower now, ahead(lead);
+  EXPECT_GT(plan_once(ahead, scenario).command_velocity.norm(), plan_once(now, scenario).command_velocity.norm());
+}
+
+TEST(ResponseTime, ZeroIsTheV1CommandExactly) {
+  const core::Scenario scenario = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
+  planners::Follower v1, zero(planners::FollowerSettings{});
+  EXPECT_EQ(plan_once(v1, scenario).command_velocity, plan_once(zero, scenario).command_velocity);
+}
+
+}  // namespace
+}  // namespace occtrack
