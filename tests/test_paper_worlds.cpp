@@ -8,8 +8,14 @@
 #include <limits>
 #include <vector>
 
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "occtrack/io/scenario.hpp"
 #include "occtrack/sim/geometry.hpp"
 #include "occtrack/sim/paper_worlds.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
 #include "occtrack/sim/world.hpp"
 
 namespace {
@@ -178,6 +184,68 @@ TEST(PaperWorlds, RandomWorldIsTheTable) {
   EXPECT_GT(w.clearance(sim::random_world_start().robot, 0.0), 0.5);
   EXPECT_GT(w.clearance(sim::random_world_start().target, 0.0), 0.5);
   EXPECT_FALSE(w.segment_blocked(sim::random_world_start().robot, sim::random_world_start().target, 0.0));
+}
+
+// A tele-operated episode can begin where the paper's did: the target at its start, the robot at its own.
+TEST(PaperWorlds, TeleopEpisodesStartAtThePapersStarts) {
+  sim::TargetSettings target = sim::teleop_target_settings(1.0);
+  target.duration = 10.0;
+  const sim::WorldArea area = sim::six_wall_area();
+  target.area_width = area.width;
+  target.area_height = area.height;
+  target.area_center_x = area.center_x;
+  target.area_center_y = area.center_y;
+  target.start = sim::six_wall_start().target;
+  target.robot_start = sim::six_wall_start().robot;
+  for (const bool sliding : {false, true}) {
+    const Scenario s = sim::generate_episode(sim::six_wall_world(sliding), target, 7, "start");
+    EXPECT_EQ(s.target.front().position, Vec2(3.0, -1.0));
+    EXPECT_EQ(s.robot_position, Vec2(4.0, -2.0));
+    EXPECT_GT((s.target[20].position - s.target.front().position).norm(), 0.5);  // it drives off
+  }
+
+  std::string error;
+  sim::TargetSettings bad = target;
+  bad.start = Vec2(std::numeric_limits<double>::quiet_NaN(), 0.0);
+  EXPECT_FALSE(bad.validate(&error));
+  EXPECT_NE(error.find("start.x"), std::string::npos) << error;
+  sim::TargetSettings smooth;
+  smooth.robot_start = Vec2(4.0, -2.0);
+  EXPECT_FALSE(smooth.validate(&error));
+  EXPECT_NE(error.find("robot_start"), std::string::npos) << error;
+}
+
+// The shipped worlds (scenarios/worlds/, scenarios/README.md "Suites v2"): the paper's worlds and starts.
+TEST(PaperWorlds, ShippedWorldFiles) {
+  const std::filesystem::path root =
+      std::filesystem::path(OCCTRACK_TEST_DATA_DIR) / ".." / ".." / "scenarios" / "worlds";
+  struct Expected {
+    std::string file;
+    Scenario world;
+    sim::PaperStart start;
+  };
+  const Expected expected[] = {{"six-wall.yaml", sim::six_wall_world(false), sim::six_wall_start()},
+                               {"six-wall-sliding.yaml", sim::six_wall_world(true), sim::six_wall_start()},
+                               {"random.yaml", sim::random_world(), sim::random_world_start()}};
+  for (const Expected& e : expected) {
+    SCOPED_TRACE(e.file);
+    const Scenario s = occtrack::io::read_scenario((root / e.file).string());
+    ASSERT_EQ(s.obstacles.size(), e.world.obstacles.size());
+    for (std::size_t k = 0; k < s.obstacles.size(); ++k) {
+      EXPECT_EQ(s.obstacles[k].center, e.world.obstacles[k].center) << k;
+      EXPECT_EQ(s.obstacles[k].size, e.world.obstacles[k].size) << k;
+      EXPECT_EQ(s.obstacles[k].radius, e.world.obstacles[k].radius) << k;
+      EXPECT_EQ(s.obstacles[k].path, e.world.obstacles[k].path) << k;
+      EXPECT_NEAR(s.obstacles[k].yaw, e.world.obstacles[k].yaw, 1e-12) << k;
+    }
+    EXPECT_EQ(s.robot_position, e.start.robot);
+    EXPECT_EQ(s.target.front().position, e.start.target);
+    EXPECT_GE(s.duration, 30.0);
+    sim::World w(s);
+    double closest = std::numeric_limits<double>::infinity();
+    for (double t = 0.0; t <= s.duration; t += 0.02) closest = std::min(closest, w.clearance(w.target_position(t), t));
+    EXPECT_GT(closest, s.target_radius);
+  }
 }
 
 }  // namespace

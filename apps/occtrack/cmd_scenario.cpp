@@ -1,6 +1,8 @@
 // occtrack scenario generate --suite NAME|all --out DIR [--seed S] [--episodes N] [--duration SECONDS]
 // occtrack scenario generate --kind forest|boxes|mixed --seed S --target-speed V --duration D --out FILE
 //                            [--obstacles N] [--moving-obstacles N]
+// occtrack scenario generate --paper-world six-wall|six-wall-sliding|random --out FILE [--seed S]
+//                            [--target-speed V] [--duration D]
 //
 // Writes the benchmark suites of shared/spec/simulation.md as scenario files (DIR/<suite>/<world>-<k>.yaml),
 // or one scenario of a freshly generated world. Each file written gets one line: its obstacles, the target's
@@ -15,6 +17,7 @@
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "occtrack/io/scenario.hpp"
+#include "occtrack/sim/paper_worlds.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
 namespace occtrack::app {
@@ -24,6 +27,7 @@ namespace {
 struct Options {
   std::string suite;
   std::string kind;
+  std::string paper_world;
   std::string out;
   std::optional<std::uint64_t> seed;
   std::optional<int> episodes;
@@ -163,6 +167,33 @@ int run_single(const Options& o) {
   return kExitOk;
 }
 
+// One episode in a paper's world (sim/paper_worlds.hpp) as the paper began it: the target tele-operated from
+// the paper's target start (areas as the v2 suites'), the robot at the paper's drone start.
+int run_paper_world(const Options& o) {
+  const bool six_wall = o.paper_world != "random";
+  const core::Scenario world = six_wall ? sim::six_wall_world(o.paper_world == "six-wall-sliding") : sim::random_world();
+  const sim::PaperStart start = six_wall ? sim::six_wall_start() : sim::random_world_start();
+  const sim::WorldArea area = six_wall ? sim::six_wall_area() : sim::random_world_area();
+  sim::TargetSettings target = sim::teleop_target_settings(o.target_speed);
+  target.duration = o.duration.value_or(60.0);
+  target.area_width = area.width;
+  target.area_height = area.height;
+  target.area_center_x = area.center_x;
+  target.area_center_y = area.center_y;
+  target.start = start.target;
+  target.robot_start = start.robot;
+  std::string error;
+  if (!target.validate(&error)) {
+    std::cerr << "occtrack scenario generate: " << error << "\n";
+    return kExitInputError;
+  }
+  const std::filesystem::path path(o.out);
+  const core::Scenario s = sim::generate_episode(world, target, o.seed.value_or(1), path.stem().string());
+  Summary summary;
+  write_scenario(s, path, summary);
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_scenario_command(CLI::App& app, int& exit_code) {
@@ -178,25 +209,34 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
                                        "clutter-dynamic-2ms, their -smoke versions, or all");
   CLI::Option* kind = cmd->add_option("--kind", o->kind, "One scenario in a new world of this kind")
                           ->check(CLI::IsMember({"forest", "boxes", "mixed"}));
+  CLI::Option* paper_world =
+      cmd->add_option("--paper-world", o->paper_world,
+                      "One tele-operated episode in a paper's world from the paper's robot and target starts")
+          ->check(CLI::IsMember({"six-wall", "six-wall-sliding", "random"}));
   suite->excludes(kind);
+  paper_world->excludes(suite)->excludes(kind);
   cmd->add_option("--out", o->out, "Folder holding the suite folders (--suite), or the file to write (--kind)")
       ->required();
   cmd->add_option("--seed", o->seed,
                   "--suite: episode seed base (episode k of world w uses base + 20 w + k; default: the suite's); "
-                  "--kind: world seed (default 1)");
+                  "--kind: world seed (default 1); --paper-world: episode seed (default 1)");
   cmd->add_option("--episodes", o->episodes, "Episodes per world (--suite; default: the suite's)")
       ->check(CLI::Range(1, 19));
-  cmd->add_option("--duration", o->duration, "Seconds of target motion per episode (default: the suite's, or 150)")
+  cmd->add_option("--duration", o->duration,
+                  "Seconds of target motion per episode (default: the suite's; --kind 150, --paper-world 60)")
       ->check(CLI::Range(0.5, 36000.0));
-  add_bounded_option(cmd, "--target-speed", o->target_speed, "Largest target speed, m/s (--kind)", 0.05, 20.0);
+  add_bounded_option(cmd, "--target-speed", o->target_speed,
+                     "Largest target speed (--kind), or the tele-operated target's nominal speed (--paper-world), m/s",
+                     0.05, 20.0);
   cmd->add_option("--obstacles", o->obstacles, "Static obstacles (--kind; default: as in the suites' worlds)")
       ->check(CLI::Range(0, 100000));
   add_bounded_option(cmd, "--moving-obstacles", o->moving_obstacles, "Moving obstacles at 0.7 m/s (--kind)", 0, 1000);
   set_command_body(cmd, exit_code, [o] {
-    if (o->suite.empty() == o->kind.empty()) {
-      std::cerr << "occtrack scenario generate: give one of --suite or --kind\n";
+    if (o->suite.empty() + o->kind.empty() + o->paper_world.empty() != 2) {
+      std::cerr << "occtrack scenario generate: give one of --suite, --kind or --paper-world\n";
       return kExitInputError;
     }
+    if (!o->paper_world.empty()) return run_paper_world(*o);
     return o->suite.empty() ? run_single(*o) : run_suites(*o);
   });
 }

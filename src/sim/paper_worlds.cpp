@@ -105,4 +105,7 @@ core::Scenario random_world() {
 
 PaperStart random_world_start() { return {Vec2(-3.0, 0.0), Vec2(-0.6, -1.0)}; }
 
+WorldArea six_wall_area() { return {15.0, 16.0, 2.0, 0.5}; }
+WorldArea random_world_area() { return {31.0, 27.0, -0.5, 1.2}; }
+
 }  // namespace occtrack::sim

@@ -107,6 +107,16 @@ bool TargetSettings::validate(std::string* error) const {
   c.require(max_backtracks >= 0, "max_backtracks (", max_backtracks, ") must not be negative");
   c.finite(area_center_x, "area_center_x");
   c.finite(area_center_y, "area_center_y");
+  if (start) {
+    c.finite(start->x(), "start.x");
+    c.finite(start->y(), "start.y");
+    c.require(motion == TargetMotion::teleop, "start must be unset with motion smooth (it draws its own)");
+  }
+  if (robot_start) {
+    c.finite(robot_start->x(), "robot_start.x");
+    c.finite(robot_start->y(), "robot_start.y");
+    c.require(motion == TargetMotion::teleop, "robot_start must be unset with motion smooth (it places its own)");
+  }
   if (motion == TargetMotion::smooth) {
     c.require(area_center_x == 0.0 && area_center_y == 0.0, "area_center_x, area_center_y (", area_center_x, ", ",
               area_center_y, ") must be 0 with motion smooth (its area is centred on the origin)");

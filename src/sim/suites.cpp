@@ -31,14 +31,13 @@ TargetSettings target_settings(double max_speed, double duration) {
 
 // A v2 suite's target: the generator's tele-operation calibrated for `nominal_speed` (its defaults), 90 s
 // episodes, over the area that holds the world's obstacles.
-TargetSettings teleop_target(double nominal_speed, double width, double height, double center_x,
-                             double center_y) {
+TargetSettings teleop_target(double nominal_speed, const WorldArea& area) {
   TargetSettings t = teleop_target_settings(nominal_speed);
   t.duration = 90.0;
-  t.area_width = width;
-  t.area_height = height;
-  t.area_center_x = center_x;
-  t.area_center_y = center_y;
+  t.area_width = area.width;
+  t.area_height = area.height;
+  t.area_center_x = area.center_x;
+  t.area_center_y = area.center_y;
   return t;
 }
 
@@ -127,14 +126,13 @@ std::vector<SuiteSpec> benchmark_suites_v2() {
   SuiteWorld dynamic{"dynamic-a", world_settings(WorldKind::mixed, 65, 6), 1004, std::nullopt, 0};
   dynamic.settings.moving_speed = 1.0;
 
-  // Areas holding each world with room round it: the six walls (sliding ones at their farthest included) lie in
-  // x -3.2..6.9, y -6.1..7.0; the random world's obstacles in x -15.1..14.2, y -11.5..13.7; the v1 worlds are
-  // 30 m x 30 m about the origin.
-  const TargetSettings six_wall_1 = teleop_target(1.0, 15.0, 16.0, 2.0, 0.5);
-  const TargetSettings six_wall_2 = teleop_target(2.0, 15.0, 16.0, 2.0, 0.5);
-  const TargetSettings six_wall_15 = teleop_target(1.5, 15.0, 16.0, 2.0, 0.5);
-  const TargetSettings random_2 = teleop_target(2.0, 31.0, 27.0, -0.5, 1.2);
-  const TargetSettings clutter_2 = teleop_target(2.0, 30.0, 30.0, 0.0, 0.0);
+  // Areas holding each world with room round it (paper_worlds.hpp); the v1 worlds are 30 m x 30 m about the
+  // origin.
+  const TargetSettings six_wall_1 = teleop_target(1.0, six_wall_area());
+  const TargetSettings six_wall_2 = teleop_target(2.0, six_wall_area());
+  const TargetSettings six_wall_15 = teleop_target(1.5, six_wall_area());
+  const TargetSettings random_2 = teleop_target(2.0, random_world_area());
+  const TargetSettings clutter_2 = teleop_target(2.0, WorldArea{30.0, 30.0, 0.0, 0.0});
 
   std::vector<SuiteSpec> suites;
   suites.push_back({"sixwall-1ms", {six_wall}, six_wall_1, 10, 1700});

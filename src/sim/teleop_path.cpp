@@ -415,13 +415,15 @@ class TeleopMaker {
   Driver start() {
     for (int attempt = 0; attempt < 100000; ++attempt) {
       Driver d;
-      d.position = round_to(center_ + Vec2(rng_.uniform(-half_w_, half_w_), rng_.uniform(-half_h_, half_h_)),
-                            t_.decimals);
+      d.position = t_.start ? *t_.start
+                            : round_to(center_ + Vec2(rng_.uniform(-half_w_, half_w_), rng_.uniform(-half_h_, half_h_)),
+                                       t_.decimals);
       if (!free_space_.free(local(d.position)) || !static_clear(d.position, d.position, 0.1)) continue;
       if (!moving_clear(d.position, d.position, 0.0, 0.5, 0.3)) continue;
+      if (t_.start) d.yaw = rng_.uniform(-kPi, kPi);  // a fixed start: try every first heading, not only +x
       if (!new_goal(d, 0.0)) continue;
       d.yaw = wanted_course(d);
-      if (!robot_fits(robot_behind(d.position, d.yaw), d.position)) continue;
+      if (!robot_fits(t_.robot_start ? *t_.robot_start : robot_behind(d.position, d.yaw), d.position)) continue;
       d.forward = s_.forward_mean;
       d.next_command = rng_.uniform(s_.command_period_min, s_.command_period_max);
       d.next_strafe = exponential(mean_gap(s_.strafe_share, 0.5 * (s_.strafe_min + s_.strafe_max)));
@@ -437,6 +439,10 @@ class TeleopMaker {
   Vec2 robot_behind(const Vec2& target, double heading) const { return checks_.robot_behind(target, heading); }
   bool robot_fits(const Vec2& robot, const Vec2& target) { return checks_.robot_fits(robot, target); }
   bool place_robot(const std::vector<Driver>& states, Vec2& robot) {
+    if (t_.robot_start) {
+      robot = *t_.robot_start;
+      return robot_fits(robot, states.front().position);
+    }
     std::vector<Vec2> path;
     path.reserve(states.size());
     for (const Driver& d : states) path.push_back(d.position);

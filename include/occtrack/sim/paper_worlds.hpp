@@ -36,4 +36,15 @@ core::Scenario random_world();
 /// Drone (-3, 0), target (-0.6, -1).
 PaperStart random_world_start();
 
+/// The rectangle a generated target roams in (TargetSettings::area_width, area_height, area_center_x/y):
+/// the world's obstacles with room round them. Six-wall: the walls, sliding ones at their farthest included,
+/// lie in x -3.2..6.9, y -6.1..7.0, so 15 m x 16 m about (2, 0.5). Random world: its obstacles lie in
+/// x -15.1..14.2, y -11.5..13.7, so 31 m x 27 m about (-0.5, 1.2).
+struct WorldArea {
+  double width = 0.0, height = 0.0;
+  double center_x = 0.0, center_y = 0.0;
+};
+WorldArea six_wall_area();
+WorldArea random_world_area();
+
 }  // namespace occtrack::sim

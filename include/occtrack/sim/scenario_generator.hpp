@@ -164,6 +164,11 @@ struct TargetSettings {
   double area_center_x = 0.0;
   double area_center_y = 0.0;
   double area_margin = 1.0;        ///< m, the target's centre stays this far inside the area
+  /// Teleop only: the target's and the robot's first positions (the paper's starts, sim/paper_worlds.hpp).
+  /// Unset, the target's is drawn in the area and the robot placed robot_distance behind it; a fixed robot
+  /// start must keep robot_clearance and see the target's start. generate_episode throws when none fits.
+  std::optional<core::Vec2> start;
+  std::optional<core::Vec2> robot_start;
 
   double robot_radius = 0.25;      ///< m
   double robot_distance = 2.0;     ///< m, the robot starts this far behind the target's start
