@@ -188,13 +188,7 @@ TEST(PaperWorlds, RandomWorldIsTheTable) {
 
 // A tele-operated episode can begin where the paper's did: the target at its start, the robot at its own.
 TEST(PaperWorlds, TeleopEpisodesStartAtThePapersStarts) {
-  sim::TargetSettings target = sim::teleop_target_settings(1.0);
-  target.duration = 10.0;
-  const sim::WorldArea area = sim::six_wall_area();
-  target.area_width = area.width;
-  target.area_height = area.height;
-  target.area_center_x = area.center_x;
-  target.area_center_y = area.center_y;
+  sim::TargetSettings target = sim::teleop_target_in(sim::six_wall_area(), 1.0, 10.0);
   target.start = sim::six_wall_start().target;
   target.robot_start = sim::six_wall_start().robot;
   for (const bool sliding : {false, true}) {

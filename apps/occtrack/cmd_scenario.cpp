@@ -174,12 +174,7 @@ int run_paper_world(const Options& o) {
   const core::Scenario world = six_wall ? sim::six_wall_world(o.paper_world == "six-wall-sliding") : sim::random_world();
   const sim::PaperStart start = six_wall ? sim::six_wall_start() : sim::random_world_start();
   const sim::WorldArea area = six_wall ? sim::six_wall_area() : sim::random_world_area();
-  sim::TargetSettings target = sim::teleop_target_settings(o.target_speed);
-  target.duration = o.duration.value_or(60.0);
-  target.area_width = area.width;
-  target.area_height = area.height;
-  target.area_center_x = area.center_x;
-  target.area_center_y = area.center_y;
+  sim::TargetSettings target = sim::teleop_target_in(area, o.target_speed, o.duration.value_or(60.0));
   target.start = start.target;
   target.robot_start = start.robot;
   std::string error;

@@ -108,4 +108,14 @@ PaperStart random_world_start() { return {Vec2(-3.0, 0.0), Vec2(-0.6, -1.0)}; }
 WorldArea six_wall_area() { return {15.0, 16.0, 2.0, 0.5}; }
 WorldArea random_world_area() { return {31.0, 27.0, -0.5, 1.2}; }
 
+TargetSettings teleop_target_in(const WorldArea& area, double nominal_speed, double duration) {
+  TargetSettings t = teleop_target_settings(nominal_speed);
+  t.duration = duration;
+  t.area_width = area.width;
+  t.area_height = area.height;
+  t.area_center_x = area.center_x;
+  t.area_center_y = area.center_y;
+  return t;
+}
+
 }  // namespace occtrack::sim

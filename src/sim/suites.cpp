@@ -32,13 +32,7 @@ TargetSettings target_settings(double max_speed, double duration) {
 // A v2 suite's target: the generator's tele-operation calibrated for `nominal_speed` (its defaults), 90 s
 // episodes, over the area that holds the world's obstacles.
 TargetSettings teleop_target(double nominal_speed, const WorldArea& area) {
-  TargetSettings t = teleop_target_settings(nominal_speed);
-  t.duration = 90.0;
-  t.area_width = area.width;
-  t.area_height = area.height;
-  t.area_center_x = area.center_x;
-  t.area_center_y = area.center_y;
-  return t;
+  return teleop_target_in(area, nominal_speed, 90.0);
 }
 
 SuiteWorld fixed_world(const std::string& name, core::Scenario world) {

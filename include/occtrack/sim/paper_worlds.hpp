@@ -6,6 +6,7 @@
 #pragma once
 
 #include "occtrack/core/scenario.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
 
 namespace occtrack::sim {
 
@@ -46,5 +47,9 @@ struct WorldArea {
 };
 WorldArea six_wall_area();
 WorldArea random_world_area();
+
+/// Tele-operated target settings for a world: teleop_target_settings(nominal_speed) over `area`, episodes of
+/// `duration` seconds (the v2 suites and the shipped worlds).
+TargetSettings teleop_target_in(const WorldArea& area, double nominal_speed, double duration);
 
 }  // namespace occtrack::sim
