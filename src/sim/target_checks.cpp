@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "../core/no_fma.hpp"
 #include "generator_support.hpp"
@@ -107,6 +108,37 @@ bool TargetChecks::place_robot(const std::vector<Vec2>& path, double heading, Ve
     if (robot_fits(robot, start)) return true;
   }
   return false;
+}
+
+core::Scenario episode_scenario(const core::Scenario& world, const TargetSettings& t, const std::string& name,
+                                std::vector<core::TargetWaypoint> target, const Vec2& robot) {
+  core::Scenario s;
+  s.name = name;
+  s.duration = t.duration;
+  s.obstacles = world.obstacles;
+  s.robot_radius = t.robot_radius;
+  s.target_radius = t.target_radius;
+  s.sensor = t.sensor;
+  s.target = std::move(target);
+  s.robot_position = robot;
+  s.robot_velocity = Vec2::Zero();
+  return s;
+}
+
+double advance_on_route(const std::vector<Vec2>& route, std::size_t& index, const Vec2& p) {
+  double best = (route[index] - p).norm();
+  const std::size_t end = std::min(route.size(), index + 40);
+  for (std::size_t j = index + 1; j < end; ++j)
+    if (const double r = (route[j] - p).norm(); r < best) best = r, index = j;
+  return best;
+}
+
+double route_heading(const std::vector<Vec2>& route, std::size_t index, const Vec2& p, double lookahead,
+                     double fallback) {
+  std::size_t j = index;
+  for (double along = 0.0; j + 1 < route.size() && along < lookahead; ++j) along += (route[j + 1] - route[j]).norm();
+  const Vec2 to = route[j] - p;
+  return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : fallback;
 }
 
 }  // namespace occtrack::sim::generator

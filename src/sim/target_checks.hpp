@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "occtrack/core/scenario.hpp"
@@ -53,5 +54,19 @@ class TargetChecks {
   Vec2 center_;
   double half_w_, half_h_;
 };
+
+/// An episode as both operators write it: the world's obstacles, the settings' duration, radii and sensor, the
+/// target's waypoints, the robot at rest at `robot`.
+core::Scenario episode_scenario(const core::Scenario& world, const TargetSettings& t, const std::string& name,
+                                std::vector<core::TargetWaypoint> target, const Vec2& robot);
+
+// Following a route (cell centres from free_space.hpp, in world coordinates): both operators steer along it.
+
+/// Moves `index` to the route point nearest `p`, searching up to 40 points forward (never back); its distance.
+double advance_on_route(const std::vector<Vec2>& route, std::size_t& index, const Vec2& p);
+/// The direction from `p` to the route point `lookahead` metres (along the route) beyond point `index`;
+/// `fallback` when p is on it.
+double route_heading(const std::vector<Vec2>& route, std::size_t index, const Vec2& p, double lookahead,
+                     double fallback);
 
 }  // namespace occtrack::sim::generator

@@ -86,19 +86,10 @@ class EpisodeMaker {
   core::Scenario make(const core::Scenario& world, const std::string& name) {
     Vec2 robot_start = Vec2::Zero();
     const std::vector<Operator> states = drive(robot_start);
-    core::Scenario s;
-    s.name = name;
-    s.duration = t_.duration;
-    s.obstacles = world.obstacles;
-    s.robot_radius = t_.robot_radius;
-    s.target_radius = t_.target_radius;
-    s.sensor = t_.sensor;
-    s.target.reserve(states.size());
-    for (std::size_t k = 0; k < states.size(); ++k)
-      s.target.push_back({time_of(static_cast<int>(k)), states[k].position});
-    s.robot_position = robot_start;
-    s.robot_velocity = Vec2::Zero();
-    return s;
+    std::vector<core::TargetWaypoint> path;
+    path.reserve(states.size());
+    for (std::size_t k = 0; k < states.size(); ++k) path.push_back({time_of(static_cast<int>(k)), states[k].position});
+    return generator::episode_scenario(world, t_, name, std::move(path), robot_start);
   }
 
  private:
@@ -187,26 +178,9 @@ class EpisodeMaker {
     return true;
   }
 
-  // Moves route_index to the route point nearest the target (searching forward a little); its distance.
-  double advance_on_route(Operator& o) const {
-    const std::vector<Vec2>& route = *o.route;
-    std::size_t best = o.route_index;
-    double best_distance = (route[best] - o.position).norm();
-    for (std::size_t j = o.route_index + 1; j < std::min(route.size(), o.route_index + 40); ++j) {
-      const double d = (route[j] - o.position).norm();
-      if (d < best_distance) best = j, best_distance = d;
-    }
-    o.route_index = best;
-    return best_distance;
-  }
-
   // The heading towards the route point `lookahead` metres (along the route) beyond the nearest one.
   double route_heading(const Operator& o, double lookahead) const {
-    const std::vector<Vec2>& route = *o.route;
-    std::size_t j = o.route_index;
-    for (double along = 0.0; j + 1 < route.size() && along < lookahead; ++j) along += (route[j + 1] - route[j]).norm();
-    const Vec2 to = route[j] - o.position;
-    return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : o.heading;
+    return generator::route_heading(*o.route, o.route_index, o.position, lookahead, o.heading);
   }
 
   // The speed at which the turns of the route over the next few metres stay within the lateral acceleration:
@@ -330,7 +304,8 @@ class EpisodeMaker {
     }
     if (!o.braking && t >= o.next_stop) o.braking = true;
     if ((o.route->back() - o.position).norm() < 1.0 || t >= o.goal_deadline) return new_goal(o, t);
-    if (advance_on_route(o) > 0.75)  // strayed (a turn too tight, an obstacle dodged): route again
+    // Strayed (a turn too tight, an obstacle dodged): route again.
+    if (generator::advance_on_route(*o.route, o.route_index, o.position) > 0.75)
       return set_route(o, o.route->back(), t) || new_goal(o, t);
     return true;
   }

@@ -12,8 +12,11 @@
 //   - Safety: each waypoint step (a segment of the written path) must keep static_clearance from static
 //     obstacles and moving_clearance from moving ones (checked along it) and stay inside the area. When a step
 //     would not, or would head into an obstacle within the next moments, the operator corrects, mildest first:
-//     ends the strafe, steers without the noise, slows, halts; when even halting fails (a moving obstacle
-//     closing in) it backs up a few steps and draws again with a new goal.
+//     ends the strafe, steers without the noise, veers, slows, creeps along the route, halts; when even halting
+//     fails (a moving obstacle closing in) it backs up a few steps and draws again with a new goal. An operator
+//     that keeps halting (kStuckHalts) is stuck and backs up the same way, past its halts: without creeping
+//     and this, a target at 2 m/s in v1's clutter stood pinned beside an obstacle for most of an episode
+//     (halting is always clear, and it won every step where a bend left no clear straight step).
 // Determinism as in the rest of the generator (src/sim/generator_support.hpp): raw-bits random numbers, no
 // fused multiply-adds, positions rounded before they are checked.
 #include "teleop_path.hpp"
@@ -72,14 +75,17 @@ struct Driver {
   double goal_angle = 0.0;       // rad, direction of the goal from that obstacle's centre
   double loop_sense = 1.0;       // +1 or -1: the way round the obstacle
   double veer = 0.0;             // +1 or -1 while a correction holds the yaw rate at its largest (one step)
+  int halts = 0;                 // steps halted by a correction since the goal was drawn
 };
 
 // How the operator corrects a step that would break a clearance, mildest first; each includes the ones before
 // (veer: steering without the noise, the yaw rate at its largest one way or the other for this step).
-enum class Correction { none, end_strafe, steer, veer_toward, veer_away, slow, halt };
-constexpr Correction kCorrections[] = {Correction::none,       Correction::end_strafe, Correction::steer,
+// creep: a slow push of the stick straight along the route's next half metre (forward and sideways
+// together), the way an operator edges round a tight corner rather than standing before it.
+enum class Correction { none, end_strafe, steer, veer_toward, veer_away, slow, creep, halt };
+constexpr Correction kCorrections[] = {Correction::none,      Correction::end_strafe, Correction::steer,
                                        Correction::veer_toward, Correction::veer_away, Correction::slow,
-                                       Correction::halt};
+                                       Correction::creep,     Correction::halt};
 
 class TeleopMaker {
  public:
@@ -89,6 +95,13 @@ class TeleopMaker {
   static constexpr double kCell = 0.1;
   static constexpr double kLookahead = 0.6;       // s of motion ahead that should stay clear of static obstacles
   static constexpr double kMovingLookahead = 1.0;  // s, the same for moving obstacles (preferred, not required)
+  static constexpr double kCreep = 0.25;          // share of nominal, the speed of Correction::creep
+  // Halted steps per goal after which the operator counts as stuck: in dense clutter a route can bend round an
+  // obstacle so tightly that not even a creep towards it leaves kLookahead of straight motion clear, and
+  // halting (always clear) would win every step for the rest of the episode. A stuck operator is a dead end:
+  // it backs up to before the halts and draws a new goal. Recorded operators stop 1 % of the time, in short
+  // stops (the stop schedule's, which are no corrections).
+  static constexpr int kStuckHalts = 10;
 
   TeleopMaker(const core::Scenario& world, const TargetSettings& t, std::uint64_t seed)
       : t_(t),
@@ -107,20 +120,12 @@ class TeleopMaker {
   core::Scenario make(const core::Scenario& world, const std::string& name) {
     Vec2 robot_start = Vec2::Zero();
     const std::vector<Driver> states = drive(robot_start);
-    core::Scenario s;
-    s.name = name;
-    s.duration = t_.duration;
-    s.obstacles = world.obstacles;
-    s.robot_radius = t_.robot_radius;
-    s.target_radius = t_.target_radius;
-    s.sensor = t_.sensor;
-    s.target.reserve(states.size());
+    std::vector<core::TargetWaypoint> path;
+    path.reserve(states.size());
     // Times rounded as positions are, so that the file reads 0.3, not 0.30000000000000004.
     for (std::size_t k = 0; k < states.size(); ++k)
-      s.target.push_back({round_to(time_of(static_cast<int>(k)), t_.decimals), states[k].position});
-    s.robot_position = robot_start;
-    s.robot_velocity = Vec2::Zero();
-    return s;
+      path.push_back({round_to(time_of(static_cast<int>(k)), t_.decimals), states[k].position});
+    return generator::episode_scenario(world, t_, name, std::move(path), robot_start);
   }
 
  private:
@@ -158,12 +163,15 @@ class TeleopMaker {
         if (k >= failed_at) failures_in_a_row = 0;
         continue;
       }
+      // A stuck operator backs up past its halts as well (their number is the driver's before the failed step).
+      const int stuck_back = stuck_ ? states.back().halts : 0;
+      stuck_ = false;
       if (++backtracks > t_.max_backtracks)
         throw std::runtime_error("generate_episode: gave up after " + std::to_string(t_.max_backtracks) +
                                  " dead ends; the world is too crowded for the target's clearances");
       ++failures_in_a_row;
       failed_at = std::max(failed_at, k);
-      const int back = std::min(k, 4 + 2 * failures_in_a_row);
+      const int back = std::min(k, 4 + 2 * failures_in_a_row + stuck_back);
       states.resize(static_cast<std::size_t>(k - back + 1));
       if (k - back == 0 && failures_in_a_row > 8) {
         states.clear();
@@ -244,6 +252,7 @@ class TeleopMaker {
       d.goal_obstacle = obstacle;
       d.goal_angle = angle;
       d.loop_sense = sense;
+      d.halts = 0;
       return true;
     }
     return false;
@@ -265,30 +274,15 @@ class TeleopMaker {
     return true;
   }
 
-  // Moves route_index to the route point nearest the target (searching forward a little); its distance.
-  static double advance_on_route(Driver& d) {
-    const std::vector<Vec2>& route = *d.route;
-    double best = (route[d.route_index] - d.position).norm();
-    const std::size_t end = std::min(route.size(), d.route_index + 40);
-    for (std::size_t j = d.route_index + 1; j < end; ++j)
-      if (const double r = (route[j] - d.position).norm(); r < best) best = r, d.route_index = j;
-    return best;
-  }
-
   // The direction of motion the operator wants: towards the route point `lookahead` metres further on.
   double wanted_course(const Driver& d) const {
-    const std::vector<Vec2>& route = *d.route;
-    std::size_t j = d.route_index;
-    const double lookahead = 1.0 + 0.6 * nominal();
-    for (double along = 0.0; j + 1 < route.size() && along < lookahead; ++j) along += (route[j + 1] - route[j]).norm();
-    const Vec2 to = route[j] - d.position;
-    return to.squaredNorm() > 1e-12 ? std::atan2(to.y(), to.x()) : d.yaw;
+    return generator::route_heading(*d.route, d.route_index, d.position, 1.0 + 0.6 * nominal(), d.yaw);
   }
 
   // New goal when the goal is reached or overdue, a new route when the target strayed; false at a dead end.
   bool update_intentions(Driver& d, double t) {
     if ((d.route->back() - d.position).norm() < 0.8 || t >= d.goal_deadline) return new_goal(d, t);
-    if (advance_on_route(d) > 0.8) return reroute(d) || new_goal(d, t);
+    if (generator::advance_on_route(*d.route, d.route_index, d.position) > 0.8) return reroute(d) || new_goal(d, t);
     return true;
   }
 
@@ -333,13 +327,18 @@ class TeleopMaker {
                                             -s_.yaw_rate_max, s_.yaw_rate_max);
   }
 
-  // Moves the body for `tau` seconds at the current commands, their speeds times `ease`.
-  void move(Driver& d, Vec2& p, double now, double tau, double ease) const {
+  // Moves the body for `tau` seconds at the current commands, their speeds times `ease`, or at velocity
+  // `*creep` (world frame) when given.
+  void move(Driver& d, Vec2& p, double now, double tau, double ease, const Vec2* creep = nullptr) const {
     if (now >= d.stop_until) {
-      const double mid = d.yaw + 0.5 * d.yaw_rate * tau;
-      const Vec2 body(ease * d.forward * nominal(), ease * d.sideways * nominal());
-      const Vec2 ahead = direction(mid), left(-ahead.y(), ahead.x());
-      p += tau * (body.x() * ahead + body.y() * left);
+      if (creep) {
+        p += tau * *creep;
+      } else {
+        const double mid = d.yaw + 0.5 * d.yaw_rate * tau;
+        const Vec2 body(ease * d.forward * nominal(), ease * d.sideways * nominal());
+        const Vec2 ahead = direction(mid), left(-ahead.y(), ahead.x());
+        p += tau * (body.x() * ahead + body.y() * left);
+      }
     }
     d.yaw = wrap_angle(d.yaw + d.yaw_rate * tau);
   }
@@ -364,16 +363,22 @@ class TeleopMaker {
     if (c != Correction::none) steer(d);
     // Slowing holds for this step only: the operator eases off the stick while a wall is close ahead.
     const double ease = c >= Correction::slow ? 0.5 : 1.0;
+    // Creeping: towards the route point half a metre on, whatever the body's heading (sideways stick too).
+    Vec2 creep_velocity = Vec2::Zero();
+    if (c == Correction::creep)
+      creep_velocity = kCreep * nominal() *
+                       direction(generator::route_heading(*d.route, d.route_index, d.position, 0.5, course(d)));
+    const Vec2* creep = c == Correction::creep ? &creep_velocity : nullptr;
     Vec2 p = d.position;
     double now = t;
     while (d.next_command <= t_next) {
-      move(d, p, now, d.next_command - now, ease);
+      move(d, p, now, d.next_command - now, ease, creep);
       const double period = rng_.uniform(s_.command_period_min, s_.command_period_max);
       now = d.next_command;
       d.next_command += period;
       update_commands(d, now, period);
     }
-    move(d, p, now, t_next - now, ease);
+    move(d, p, now, t_next - now, ease, creep);
     d.veer = 0.0;
     d.position = round_to(p, t_.decimals);
   }
@@ -399,6 +404,10 @@ class TeleopMaker {
           moving_clear(next.position, next.position + kMovingLookahead * velocity, t_next, t_next + kMovingLookahead,
                        0.2);
       if (ahead_clear) {
+        if (c == Correction::halt && ++next.halts >= kStuckHalts) {
+          stuck_ = true;
+          return false;
+        }
         d = std::move(next);
         return true;
       }
@@ -458,50 +467,34 @@ class TeleopMaker {
   double half_w_ = 0.0, half_h_ = 0.0;
   FreeSpace free_space_;
   int steps_ = 0;
+  bool stuck_ = false;  // the last failed step was an operator stuck halting (step())
 };
 
-// The calm style of the 0.5 m/s recording and the wild one of the 1 m/s recording.
-TeleopStyle calm_style() {
-  TeleopStyle s;
-  s.forward_mean = 0.97;
-  s.forward_noise = 0.022;
-  s.forward_time = 2.0;
-  s.yaw_gain = 0.55;
-  s.yaw_noise = 0.09;
-  s.yaw_noise_time = 5.4;
-  s.yaw_rate_max = 1.8;
-  s.turn_bias = 0.13;
-  s.turn_flip_time = 1.5;
-  s.strafe_share = 0.03;
-  s.strafe_min = 0.25;
-  s.strafe_max = 1.08;
-  s.strafe_speed_min = 0.51;
-  s.strafe_speed_max = 0.76;
-  s.goal_gap_min = 1.07;
-  s.goal_gap_max = 1.51;
-  s.loop_share = 1.0;
-  return s;
-}
+// The calm style of the 0.5 m/s recording and the wild one of the 1 m/s recording (fields not named keep
+// TeleopStyle's defaults).
+constexpr TeleopStyle kCalmStyle{.forward_mean = 0.97, .forward_noise = 0.022, .forward_time = 2.0,
+                                 .yaw_gain = 0.55, .yaw_noise = 0.09, .yaw_noise_time = 5.4, .yaw_rate_max = 1.8,
+                                 .turn_bias = 0.13, .turn_flip_time = 1.5, .strafe_share = 0.03,
+                                 .strafe_min = 0.25, .strafe_max = 1.08, .strafe_speed_min = 0.51,
+                                 .strafe_speed_max = 0.76, .goal_gap_min = 1.07, .goal_gap_max = 1.51,
+                                 .loop_share = 1.0};
+constexpr TeleopStyle kWildStyle{.forward_mean = 1.0, .forward_noise = 0.03, .forward_time = 2.0, .yaw_gain = 2.5,
+                                 .yaw_noise = 0.6, .yaw_noise_time = 0.4, .yaw_rate_max = 3.0,
+                                 .strafe_share = 0.38, .strafe_min = 0.3, .strafe_max = 1.1,
+                                 .strafe_speed_min = 0.7, .strafe_speed_max = 1.0, .loop_share = 0.5};
 
-TeleopStyle wild_style() {
-  TeleopStyle s;
-  s.forward_mean = 1.0;
-  s.forward_noise = 0.03;
-  s.forward_time = 2.0;
-  s.yaw_gain = 2.5;
-  s.yaw_noise = 0.6;
-  s.yaw_noise_time = 0.4;
-  s.yaw_rate_max = 3.0;
-  s.strafe_share = 0.38;
-  s.strafe_min = 0.3;
-  s.strafe_max = 1.1;
-  s.strafe_speed_min = 0.7;
-  s.strafe_speed_max = 1.0;
-  s.loop_share = 0.5;
-  return s;
-}
-
-double lerp(double a, double b, double x) { return a + x * (b - a); }
+// Every field of TeleopStyle: a style between two is interpolated field by field.
+constexpr double TeleopStyle::*kStyleFields[] = {
+    &TeleopStyle::command_period_min, &TeleopStyle::command_period_max, &TeleopStyle::forward_mean,
+    &TeleopStyle::forward_noise,      &TeleopStyle::forward_time,       &TeleopStyle::yaw_gain,
+    &TeleopStyle::yaw_noise,          &TeleopStyle::yaw_noise_time,     &TeleopStyle::yaw_rate_max,
+    &TeleopStyle::turn_bias,          &TeleopStyle::turn_flip_time,     &TeleopStyle::strafe_share,
+    &TeleopStyle::strafe_min,         &TeleopStyle::strafe_max,         &TeleopStyle::strafe_speed_min,
+    &TeleopStyle::strafe_speed_max,   &TeleopStyle::stop_share,         &TeleopStyle::stop_min,
+    &TeleopStyle::stop_max,           &TeleopStyle::goal_gap_min,       &TeleopStyle::goal_gap_max,
+    &TeleopStyle::loop_share};
+static_assert(sizeof(kStyleFields) / sizeof(kStyleFields[0]) * sizeof(double) == sizeof(TeleopStyle),
+              "kStyleFields must name every field of TeleopStyle");
 
 }  // namespace
 
@@ -512,30 +505,7 @@ TargetSettings teleop_target_settings(double nominal_speed) {
   t.max_speed = nominal_speed;
   t.min_speed = std::min(t.min_speed, nominal_speed);
   const double x = std::isfinite(nominal_speed) ? std::clamp((nominal_speed - 0.5) / 0.5, 0.0, 1.0) : 0.0;
-  const TeleopStyle calm = calm_style(), wild = wild_style();
-  TeleopStyle& s = t.teleop;
-  s.command_period_min = lerp(calm.command_period_min, wild.command_period_min, x);
-  s.command_period_max = lerp(calm.command_period_max, wild.command_period_max, x);
-  s.forward_mean = lerp(calm.forward_mean, wild.forward_mean, x);
-  s.forward_noise = lerp(calm.forward_noise, wild.forward_noise, x);
-  s.forward_time = lerp(calm.forward_time, wild.forward_time, x);
-  s.yaw_gain = lerp(calm.yaw_gain, wild.yaw_gain, x);
-  s.yaw_noise = lerp(calm.yaw_noise, wild.yaw_noise, x);
-  s.yaw_noise_time = lerp(calm.yaw_noise_time, wild.yaw_noise_time, x);
-  s.yaw_rate_max = lerp(calm.yaw_rate_max, wild.yaw_rate_max, x);
-  s.strafe_share = lerp(calm.strafe_share, wild.strafe_share, x);
-  s.strafe_min = lerp(calm.strafe_min, wild.strafe_min, x);
-  s.strafe_max = lerp(calm.strafe_max, wild.strafe_max, x);
-  s.strafe_speed_min = lerp(calm.strafe_speed_min, wild.strafe_speed_min, x);
-  s.strafe_speed_max = lerp(calm.strafe_speed_max, wild.strafe_speed_max, x);
-  s.stop_share = lerp(calm.stop_share, wild.stop_share, x);
-  s.stop_min = lerp(calm.stop_min, wild.stop_min, x);
-  s.stop_max = lerp(calm.stop_max, wild.stop_max, x);
-  s.goal_gap_min = lerp(calm.goal_gap_min, wild.goal_gap_min, x);
-  s.goal_gap_max = lerp(calm.goal_gap_max, wild.goal_gap_max, x);
-  s.loop_share = lerp(calm.loop_share, wild.loop_share, x);
-  s.turn_bias = lerp(calm.turn_bias, wild.turn_bias, x);
-  s.turn_flip_time = lerp(calm.turn_flip_time, wild.turn_flip_time, x);
+  for (const auto field : kStyleFields) t.teleop.*field = kCalmStyle.*field + x * (kWildStyle.*field - kCalmStyle.*field);
   return t;
 }
 
