@@ -3,8 +3,11 @@
 // same clearances by the same arithmetic). Compiled without fused multiply-adds (generator_support.hpp).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "occtrack/core/scenario.hpp"
@@ -59,6 +62,47 @@ class TargetChecks {
 /// target's waypoints, the robot at rest at `robot`.
 core::Scenario episode_scenario(const core::Scenario& world, const TargetSettings& t, const std::string& name,
                                 std::vector<core::TargetWaypoint> target, const Vec2& robot);
+
+/// How both operators make a path: one waypoint step at a time from op.start(), `steps` steps, then the robot's
+/// start (op.place_robot). At a dead end (op.step false) it backs up 4 steps, 2 more for each failure in a
+/// row there, plus op.extra_back(the last state) (asked once per dead end), and has the operator draw again
+/// from there (op.resume(state, its time): false when no goal can be reached); it starts over where the start
+/// itself is a trap (more than 8 failures in a row back to it) or no robot start fits, and throws
+/// std::runtime_error after max_backtracks dead ends or 100 robot misses.
+template <class State, class Op>
+std::vector<State> drive_path(Op& op, int steps, const TargetSettings& t, Vec2& robot_start) {
+  std::vector<State> states;
+  int backtracks = 0, failures_in_a_row = 0, failed_at = -1, robot_misses = 0;
+  while (true) {
+    if (states.empty()) states.push_back(op.start());
+    const int k = static_cast<int>(states.size()) - 1;
+    if (k == steps) {
+      if (op.place_robot(states, robot_start)) return states;
+      if (++robot_misses > 100) throw std::runtime_error("generate_episode: found no start for the robot");
+      states.clear();  // no free spot behind the target with a view of it: start elsewhere
+      continue;
+    }
+    State next = states.back();
+    if (op.step(next, k)) {
+      states.push_back(std::move(next));
+      if (k >= failed_at) failures_in_a_row = 0;  // past the dead end
+      continue;
+    }
+    const int extra = op.extra_back(states.back());
+    if (++backtracks > t.max_backtracks)
+      throw std::runtime_error("generate_episode: gave up after " + std::to_string(t.max_backtracks) +
+                               " dead ends; the world is too crowded for the target's clearances");
+    ++failures_in_a_row;
+    failed_at = std::max(failed_at, k);
+    const int back = std::min(k, 4 + 2 * failures_in_a_row + extra);
+    states.resize(static_cast<std::size_t>(k - back + 1));
+    if (k - back == 0 && failures_in_a_row > 8) {
+      states.clear();  // the start itself is a trap: draw a new one
+      continue;
+    }
+    if (!op.resume(states.back(), (k - back) * t.waypoint_period)) states.clear();
+  }
+}
 
 // Following a route (cell centres from free_space.hpp, in world coordinates): both operators steer along it.
 

@@ -95,42 +95,16 @@ class EpisodeMaker {
  private:
   double time_of(int k) const { return k * t_.waypoint_period; }
 
-  // The operator's states at every waypoint, and the robot's start: steps forward, backs up at dead ends
-  // (further after repeated failures there), starts over where the start itself is a trap.
+  // The operator's states at every waypoint, and the robot's start (generator::drive_path calls the hooks below).
   std::vector<Operator> drive(Vec2& robot_start) {
-    std::vector<Operator> states;
-    int backtracks = 0, failures_in_a_row = 0, failed_at = -1, robot_misses = 0;
-    while (true) {
-      if (states.empty()) states.push_back(start());
-      const int k = static_cast<int>(states.size()) - 1;
-      if (k == steps_) {
-        if (place_robot(states, robot_start)) return states;
-        if (++robot_misses > 100) throw std::runtime_error("generate_episode: found no start for the robot");
-        states.clear();  // no free spot behind the target with a view of it: start elsewhere
-        continue;
-      }
-      Operator next = states.back();
-      if (step(next, k)) {
-        states.push_back(next);
-        if (k >= failed_at) failures_in_a_row = 0;  // past the dead end
-        continue;
-      }
-      // Dead end: back up a few steps and draw again from there.
-      if (++backtracks > t_.max_backtracks)
-        throw std::runtime_error("generate_episode: gave up after " + std::to_string(t_.max_backtracks) +
-                                 " dead ends; the world is too crowded for the target's clearances");
-      ++failures_in_a_row;
-      failed_at = std::max(failed_at, k);
-      const int back = std::min(k, 4 + 2 * failures_in_a_row);
-      states.resize(static_cast<std::size_t>(k - back + 1));
-      if (k - back == 0 && failures_in_a_row > 8) {
-        states.clear();  // the start itself is a trap: draw a new one
-        continue;
-      }
-      Operator& resume = states.back();
-      resume.wander = 0.0;
-      if (!new_goal(resume, time_of(k - back))) states.clear();
-    }
+    return generator::drive_path<Operator>(*this, steps_, t_, robot_start);
+  }
+  template <class State, class Op>
+  friend std::vector<State> generator::drive_path(Op&, int, const TargetSettings&, Vec2&);
+  static int extra_back(const Operator&) { return 0; }
+  bool resume(Operator& o, double t) {
+    o.wander = 0.0;
+    return new_goal(o, t);
   }
 
   // --- Constraints (src/sim/target_checks.hpp).

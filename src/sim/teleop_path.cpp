@@ -143,45 +143,22 @@ class TeleopMaker {
     return share > 0.0 ? mean_length * (1.0 - share) / share : kInfinity;
   }
 
-  // The driver's states at every waypoint, and the robot's start; backs up at dead ends (further after
-  // repeated failures there), starts over where the start itself is a trap or no robot start fits.
+  // The driver's states at every waypoint, and the robot's start (generator::drive_path calls the hooks below).
   std::vector<Driver> drive(Vec2& robot_start) {
-    std::vector<Driver> states;
-    int backtracks = 0, failures_in_a_row = 0, failed_at = -1, robot_misses = 0;
-    while (true) {
-      if (states.empty()) states.push_back(start());
-      const int k = static_cast<int>(states.size()) - 1;
-      if (k == steps_) {
-        if (place_robot(states, robot_start)) return states;
-        if (++robot_misses > 100) throw std::runtime_error("generate_episode: found no start for the robot");
-        states.clear();
-        continue;
-      }
-      Driver next = states.back();
-      if (step(next, k)) {
-        states.push_back(std::move(next));
-        if (k >= failed_at) failures_in_a_row = 0;
-        continue;
-      }
-      // A stuck operator backs up past its halts as well (their number is the driver's before the failed step).
-      const int stuck_back = stuck_ ? states.back().halts : 0;
-      stuck_ = false;
-      if (++backtracks > t_.max_backtracks)
-        throw std::runtime_error("generate_episode: gave up after " + std::to_string(t_.max_backtracks) +
-                                 " dead ends; the world is too crowded for the target's clearances");
-      ++failures_in_a_row;
-      failed_at = std::max(failed_at, k);
-      const int back = std::min(k, 4 + 2 * failures_in_a_row + stuck_back);
-      states.resize(static_cast<std::size_t>(k - back + 1));
-      if (k - back == 0 && failures_in_a_row > 8) {
-        states.clear();
-        continue;
-      }
-      Driver& resume = states.back();
-      resume.yaw_noise = 0.0;
-      resume.goal_obstacle = -1;
-      if (!new_goal(resume, time_of(k - back))) states.clear();
-    }
+    return generator::drive_path<Driver>(*this, steps_, t_, robot_start);
+  }
+  template <class State, class Op>
+  friend std::vector<State> generator::drive_path(Op&, int, const TargetSettings&, Vec2&);
+  // A stuck operator backs up past its halts as well (their number is the driver's before the failed step).
+  int extra_back(const Driver& last) {
+    const int back = stuck_ ? last.halts : 0;
+    stuck_ = false;
+    return back;
+  }
+  bool resume(Driver& d, double t) {
+    d.yaw_noise = 0.0;
+    d.goal_obstacle = -1;
+    return new_goal(d, t);
   }
 
   // --- Constraints (src/sim/target_checks.hpp, the same as the smooth generator's).
