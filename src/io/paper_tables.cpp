@@ -90,7 +90,10 @@ std::string shape(std::size_t index, double x, double y, double radius, const st
   const double r = radius * (corners == 3 ? 1.3 : 1.15);  // equal visual weight with the circle
   for (int k = 0; k < corners; ++k) {
     const double angle = (rotation_deg + 360.0 * k / corners) * std::numbers::pi / 180.0;
-    points += (k ? " " : "") + px(x + r * std::cos(angle)) + "," + px(y + r * std::sin(angle));
+    if (k) points += ' ';  // appended piecewise: GCC 12 warns falsely (-Wrestrict) on "..." + std::string&&
+    points += px(x + r * std::cos(angle));
+    points += ',';
+    points += px(y + r * std::sin(angle));
   }
   return "<polygon points=\"" + points + "\"" + paint + "/>";
 }
@@ -222,7 +225,12 @@ std::string tradeoff_svg(const std::vector<PaperRow>& rows, const std::string& t
     if (list.size() < 2) continue;
     std::sort(list.begin(), list.end(), [](const Point* a, const Point* b) { return a->x_ms < b->x_ms; });
     std::string coords;
-    for (const Point* p : list) coords += (coords.empty() ? "" : " ") + px(to_x(p->x_ms)) + "," + px(to_y(p->share));
+    for (const Point* p : list) {
+      if (!coords.empty()) coords += ' ';  // piecewise, as in shape(): GCC 12's false -Wrestrict
+      coords += px(to_x(p->x_ms));
+      coords += ',';
+      coords += px(to_y(p->share));
+    }
     svg += "<polyline class=\"link\" points=\"" + coords + "\" fill=\"none\" stroke=\"" + colour(key.first) +
            "\" stroke-width=\"1\" stroke-opacity=\"0.6\"/>\n";
   }
