@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/sim/path_stats.hpp"
+#include "suite_runner.hpp"
 
 namespace occtrack::app {
 
@@ -27,17 +28,12 @@ struct StatsOptions {
   bool json = false;
 };
 
-// FILE itself, or DIR's *.yaml files sorted by name.
-std::vector<std::filesystem::path> scenario_files(const std::string& path) {
+// FILE itself, or the scenario files of DIR (app::scenario_files).
+std::vector<std::filesystem::path> stats_files(const std::string& path) {
   namespace fs = std::filesystem;
   if (!fs::exists(path)) throw std::invalid_argument(path + ": no such file or folder");
   if (!fs::is_directory(path)) return {fs::path(path)};
-  std::vector<fs::path> files;
-  for (const fs::directory_entry& e : fs::directory_iterator(path))
-    if (e.is_regular_file() && e.path().extension() == ".yaml") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw std::invalid_argument(path + ": no *.yaml scenario files in the folder");
-  return files;
+  return app::scenario_files(path);
 }
 
 nlohmann::json stats_json(const std::string& name, const sim::PathStats& s) {
@@ -59,7 +55,7 @@ void print_row(const std::string& name, const sim::PathStats& s) {
 }
 
 int run_stats(const StatsOptions& o) {
-  const std::vector<std::filesystem::path> files = scenario_files(o.path);
+  const std::vector<std::filesystem::path> files = stats_files(o.path);
   sim::PathSamples all;
   nlohmann::json rows = nlohmann::json::array();
   if (!o.json)

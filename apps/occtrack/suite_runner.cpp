@@ -27,13 +27,18 @@ fs::path suite_folder(const std::string& suite) {
 
 }  // namespace
 
-Suite load_suite(const std::string& suite, int episodes) {
-  const fs::path folder = suite_folder(suite);
+std::vector<fs::path> scenario_files(const fs::path& folder) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(folder))
     if (entry.path().extension() == ".yaml" || entry.path().extension() == ".yml") files.push_back(entry.path());
   std::sort(files.begin(), files.end());
   if (files.empty()) throw std::runtime_error(folder.string() + ": no scenario files (*.yaml)");
+  return files;
+}
+
+Suite load_suite(const std::string& suite, int episodes) {
+  const fs::path folder = suite_folder(suite);
+  std::vector<fs::path> files = scenario_files(folder);
   if (episodes > 0 && static_cast<std::size_t>(episodes) < files.size()) files.resize(episodes);
   Suite s;
   s.name = folder.filename().string();

@@ -1,6 +1,7 @@
 // Running a suite's episodes, J at a time: the one home of `occtrack bench suite` and `occtrack bench paper`.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,10 @@
 #include "occtrack/sim/episode.hpp"
 
 namespace occtrack::app {
+
+/// The scenario files (*.yaml, *.yml) directly in `folder`, sorted by name: the one rule for which files a
+/// folder of scenarios holds (`bench suite`, `bench paper`, `scenario stats`). Throws when there are none.
+std::vector<std::filesystem::path> scenario_files(const std::filesystem::path& folder);
 
 /// A suite's scenarios, sorted by file name, and the suite's name (its folder's).
 struct Suite {
