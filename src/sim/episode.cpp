@@ -9,6 +9,7 @@
 
 #include "occtrack/core/timing.hpp"
 #include "occtrack/sim/metrics.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
 #include "occtrack/sim/world.hpp"
 
 namespace occtrack::sim {
@@ -252,12 +253,9 @@ double median_cycle_ms(planners::Planner& planner, const std::vector<core::Scena
       const int cycle_step = static_cast<int>((static_cast<long>(k) * ticks) / count) * plan_every;
       // The leash: the robot moves only when the target gets more than kLeash away, straight towards it.
       for (; step < cycle_step; ++step) {
-        const Vec2 target = world.target_position((step + 1) * dt);
-        const Vec2 offset = target - position;
-        const double distance = offset.norm();
-        const Vec2 moved = distance > kLeash ? Vec2(offset * (1.0 - kLeash / distance)) : Vec2(Vec2::Zero());
-        position += moved;
-        velocity = moved / dt;
+        const Vec2 next = leash_position(position, world.target_position((step + 1) * dt), kLeash);
+        velocity = (next - position) / dt;
+        position = next;
       }
       const double t = step * dt;
       const core::Scan scan = world.scan(position, t, rng);

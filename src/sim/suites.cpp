@@ -67,6 +67,12 @@ core::Scenario suite_world(const SuiteWorld& world) {
   return world.fixed ? *world.fixed : generate_world(world.settings, world.seed);
 }
 
+Vec2 leash_position(const Vec2& robot, const Vec2& target, double distance) {
+  const Vec2 offset = target - robot;
+  const double gap = offset.norm();
+  return gap > distance ? Vec2(target - distance * offset / gap) : robot;
+}
+
 OcclusionProfile leash_follower_occlusion(const core::Scenario& scenario, double distance, double step) {
   World world(scenario);
   OcclusionProfile profile;
@@ -77,9 +83,7 @@ OcclusionProfile leash_follower_occlusion(const core::Scenario& scenario, double
   for (int i = 0; i <= steps; ++i) {
     const double t = i * step;
     const Vec2 target = world.target_position(t);
-    const Vec2 offset = target - robot;
-    const double gap = offset.norm();
-    if (gap > distance) robot = target - distance * offset / gap;
+    robot = leash_position(robot, target, distance);
     const bool blocked = world.segment_blocked(robot, target, t);
     if (blocked && i < steps) profile.occluded_time += step;
     if (blocked && !was_blocked) ++profile.occlusion_events;

@@ -209,6 +209,10 @@ struct OcclusionProfile {
   int occlusion_events = 0;    ///< separate stretches of lost line of sight
   double duration = 0.0;       ///< s
 };
+/// Where a robot on a `distance` leash goes when the target is at `target`: it stays put while within the
+/// leash, else moves straight towards the target until exactly `distance` away. The one home of the leash, used
+/// by leash_follower_occlusion and by sim::median_cycle_ms's replayed scans.
+core::Vec2 leash_position(const core::Vec2& robot, const core::Vec2& target, double distance);
 OcclusionProfile leash_follower_occlusion(const core::Scenario& scenario, double distance = 2.0,
                                           double step = 0.05);
 
