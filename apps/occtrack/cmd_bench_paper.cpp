@@ -32,23 +32,28 @@ struct PaperPlanner {
   const char* label;
   const char* planner;
   const char* description;
-  void (*tune)(planners::PlannerOptions&);
+  void (*tune)(EpisodeCliOptions&);  ///< what sets the row apart from the v2 table settings
 };
 
 const std::vector<PaperPlanner>& paper_planners() {
   static const std::vector<PaperPlanner> rows = {
-      {"follower", "follower", "follower (naive, no occlusion awareness)", [](planners::PlannerOptions&) {}},
+      {"follower", "follower", "follower (naive, no occlusion awareness), leading its command by the robot's lag",
+       [](EpisodeCliOptions&) {}},
+      {"follower-nolead", "follower",
+       "the same follower unaware of the robot's lag (response time 0: the v1 command, the plan's first 0.1 s)",
+       [](EpisodeCliOptions& o) { o.response_time = "0"; }},
       {"autochaser", "autochaser", "AutoChaser, constant-velocity target prediction",
-       [](planners::PlannerOptions& p) { p.waypoints = 0; }},
+       [](EpisodeCliOptions& o) { o.planner_options.waypoints = 0; }},
       {"autochaser-wp100", "autochaser", "AutoChaser with 100 true future target waypoints as prior",
-       [](planners::PlannerOptions& p) { p.waypoints = 100; }},
-      {"projcem", "projcem", "Proj-CEM, online budget", [](planners::PlannerOptions&) {}},
-      {"bc", "bc", "behaviour cloning, B = 30", [](planners::PlannerOptions&) {}},
-      {"cvae-b30", "cvae", "learned policy (CVAE), B = 30", [](planners::PlannerOptions& p) { p.batch = 30; }},
-      {"cvae-b5", "cvae", "learned policy (CVAE), B = 5", [](planners::PlannerOptions& p) { p.batch = 5; }},
-      {"cvae-fixed-q", "cvae-fixed-q", "learned policy with fixed q, B = 30", [](planners::PlannerOptions&) {}},
+       [](EpisodeCliOptions& o) { o.planner_options.waypoints = 100; }},
+      {"projcem", "projcem", "Proj-CEM, online budget", [](EpisodeCliOptions&) {}},
+      {"bc", "bc", "behaviour cloning, B = 30", [](EpisodeCliOptions&) {}},
+      {"cvae-b30", "cvae", "learned policy (CVAE), B = 30",
+       [](EpisodeCliOptions& o) { o.planner_options.batch = 30; }},
+      {"cvae-b5", "cvae", "learned policy (CVAE), B = 5", [](EpisodeCliOptions& o) { o.planner_options.batch = 5; }},
+      {"cvae-fixed-q", "cvae-fixed-q", "learned policy with fixed q, B = 30", [](EpisodeCliOptions&) {}},
       {"cvae-paper", "cvae", "the paper's policy: B = 30, without the last plan and the stop plan ranked",
-       [](planners::PlannerOptions& p) { p.keep_last_plan = p.rank_stop = false; }},
+       [](EpisodeCliOptions& o) { o.planner_options.keep_last_plan = o.planner_options.rank_stop = false; }},
   };
   return rows;
 }
@@ -75,7 +80,6 @@ struct PaperOptions {
 EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_scale) {
   EpisodeCliOptions o;
   o.planner = row.planner;
-  row.tune(o.planner_options);
   o.latency = "auto";
   o.compute_scale = compute_scale;
   o.tau = 0.25;
@@ -83,6 +87,7 @@ EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_
   o.lidar_noise = "0.01";
   o.target_noise = "0.05,0.1";
   o.target_observation = "always";
+  row.tune(o);
   return o;
 }
 
@@ -111,8 +116,8 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       "compute scale and suite before its episodes (not while others run), times the compute scale; then held "
       "fixed",
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
-      "robot response: first-order lag tau 0.25 s; every planner knows it and leads its command by it "
-      "(response time 0.25 s, docs/protocol_v2.md)",
+      "robot response: first-order lag tau 0.25 s; every planner but follower-nolead knows it and leads its "
+      "command by it (response time 0.25 s, docs/protocol_v2.md)",
       "LiDAR: 360 beams, Gaussian range noise sigma 0.01 m, range the scenario's",
       "target estimate: Gaussian noise 0.05 m on position, 0.1 m/s on velocity; target_observation always",
       "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
