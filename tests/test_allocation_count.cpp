@@ -319,6 +319,17 @@ TEST(AllocationCount, LearnedPlanDoesNotAllocateAfterTheFirstCycle) {
   }
 }
 
+TEST(AllocationCount, ShieldedPlannersDoNotAllocateAfterTheFirstCycle) {
+  // The safety layer around a planner (its perception, free space and certification) keeps to the same rule.
+  for (const char* name : {"follower", "cvae"}) {
+    planners::PlannerOptions options;
+    options.shield = true;
+    options.response_time = 0.25;
+    std::unique_ptr<planners::Planner> planner = planners::make_planner(name, options);
+    EXPECT_EQ(planner_allocations(*planner), "") << name;
+  }
+}
+
 TEST(AllocationCount, ProjCemPlanDoesNotAllocateAfterTheFirstCycle) {
   planners::PlannerOptions options;
   options.samples = 48;  // the default's code path (one thread), at a third of the time

@@ -199,8 +199,8 @@ int run(const PaperOptions& o) {
           const EpisodeCliOptions episode = paper_episode_options(*p, scale);
           SuiteRunOptions run;
           run.planner = episode.planner;
-          run.planner_options = episode.planner_settings();
           run.settings = resolve_episode_settings(episode, suite.scenarios);  // alone, before the episodes
+          run.planner_options = episode.planner_settings(&run.settings);
           run.jobs = o.jobs;
           run.progress_label = "  " + name + " ";
           io::PaperRow row;

@@ -27,8 +27,8 @@ int run(const SuiteOptions& o) {
   planners::make_planner(o.episode.planner, o.episode.planner_settings());  // and an unknown planner
   SuiteRunOptions run;
   run.planner = o.episode.planner;
-  run.planner_options = o.episode.planner_settings();
   run.settings = resolve_episode_settings(o.episode, suite.scenarios);  // before the episodes, not among them
+  run.planner_options = o.episode.planner_settings(&run.settings);
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;
   const core::SuiteResult result = run_suite(suite, run);

@@ -24,9 +24,10 @@ constexpr const char* kWho = "occtrack run";
 
 int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
-  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings());
+  planners::make_planner(o.episode.planner, o.episode.planner_settings());  // a bad name fails before measuring
   // --latency auto is measured here, once, before the episode (Protocol v2).
   const sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
+  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings(&settings));
   Progress progress(scenario.name + " (" + planner->name() + ")");
   const sim::EpisodeResult result =
       sim::run_episode(scenario, *planner, settings, [&](double f) { progress.update(f); });
@@ -42,6 +43,9 @@ int run(const RunOptions& o) {
   if (m.latency_ms > 0.0 || m.occlusion_stretches > 0)
     std::printf("  latency          %.1f ms (compute scale %g); sight lost %d times, the longest for %.2f s\n",
                 m.latency_ms, m.compute_scale, m.occlusion_stretches, m.longest_occlusion_s);
+  if (m.shield.total() > 0)
+    std::printf("  safety layer     cycles: %d plan, %d lower-ranked candidate, %d stop, %d evasive, %d full brake\n",
+                m.shield.plan, m.shield.alternative, m.shield.stop, m.shield.evasive, m.shield.brake);
   std::printf("  tracking         mean distance %.2f m, %.0f%% of the time in [%.1f, %.1f] m; target out of range "
               "%.1f s\n",
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,

@@ -111,9 +111,16 @@ struct EpisodeCliOptions {
   std::string response_time;  ///< the planners' response time (s); empty: the robot's, --tau
 
   /// The planner options with the response time resolved: a planner is configured for its robot, so by
-  /// default it leads its command by the robot's lag (--tau; 0 in v1). Throws naming --response-time.
-  planners::PlannerOptions planner_settings() const {
+  /// default it leads its command by the robot's lag (--tau; 0 in v1). With the episode's settings (once
+  /// --latency is resolved), the safety layer also learns the latency, planning period and acceleration bound.
+  /// Throws naming --response-time.
+  planners::PlannerOptions planner_settings(const sim::EpisodeSettings* episode = nullptr) const {
     planners::PlannerOptions p = planner_options;
+    if (episode) {
+      p.latency = episode->latency_ms.value_or(0.0) / 1000.0;
+      p.planning_period = episode->planning_period;
+      p.accel_max = episode->robot_accel_max;
+    }
     p.response_time = tau;
     if (!response_time.empty())
       p.response_time = episode_cli::value("--response-time", response_time,
@@ -186,6 +193,9 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))
       ->capture_default_str();
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
+  cmd->add_flag("--shield", o.planner_options.shield,
+                "Through the safety layer: send only commands certified to leave the robot able to stop in "
+                "space the scan shows free (docs/safety.md)");
 
   // Protocol v2 (shared/spec/simulation.md, "Protocol v2").
   cmd->add_option("--latency", o.latency,

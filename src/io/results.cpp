@@ -39,6 +39,13 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
   j["compute_scale"] = m.compute_scale;
   j["occlusion_stretches"] = m.occlusion_stretches;
   j["longest_occlusion_s"] = m.longest_occlusion_s;
+  // Issue 11's safety layer: cycles by what it did; absent without it, so that runs without it are unchanged.
+  if (m.shield.total() > 0)
+    j["shield"] = {{"plan", m.shield.plan},
+                   {"alternative", m.shield.alternative},
+                   {"stop", m.shield.stop},
+                   {"evasive", m.shield.evasive},
+                   {"brake", m.shield.brake}};
   return j;
 }
 

@@ -12,7 +12,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -69,6 +71,27 @@ bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& 
 /// The longest extrapolation of a hidden target's last estimate (s): beyond it, a constant-velocity guess is
 /// worth less than the last place it was seen heading from (docs/protocol_v2.md).
 constexpr double kMaxTargetPrediction = 2.0;
+
+/// The most lower-ranked candidates a planner offers the safety layer (PlannerOutput::ranked_commands).
+constexpr int kRankedCommands = 32;
+
+/// Fills `ranked` with the commands of the candidates whose cost is finite, cheapest first, at most
+/// kRankedCommands: `command_of(b)` gives candidate b's command. `order` is workspace (resized to the costs).
+template <typename CommandOf>
+void rank_commands(const std::vector<double>& costs, std::vector<int>& order, CommandOf&& command_of,
+                   std::vector<Vec2>& ranked) {
+  order.resize(costs.size());
+  std::size_t finite = 0;
+  for (std::size_t b = 0; b < costs.size(); ++b)
+    if (std::isfinite(costs[b])) order[finite++] = static_cast<int>(b);
+  const std::size_t kept = std::min<std::size_t>(finite, kRankedCommands);
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(kept),
+                    order.begin() + static_cast<std::ptrdiff_t>(finite),
+                    [&](int a, int b) { return costs[static_cast<std::size_t>(a)] < costs[static_cast<std::size_t>(b)]; });
+  ranked.reserve(kRankedCommands + 1);  // once: room for the most, and one more in front (Proj-CEM's best)
+  ranked.resize(kept);
+  for (std::size_t i = 0; i < kept; ++i) ranked[i] = command_of(order[i]);
+}
 
 class Context {
  public:

@@ -5,6 +5,7 @@
 #include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/planners/proj_cem.hpp"
+#include "occtrack/planners/safety.hpp"
 
 namespace occtrack::planners {
 
@@ -12,7 +13,9 @@ std::vector<std::string> planner_names() {
   return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q", "autochaser"};
 }
 
-std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options) {
+namespace {
+
+std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {
   if (name == "projcem" || name == "projcem-expert") {
     ProjCemSettings s = name == "projcem-expert" || options.offline_expert
                             ? ProjCemSettings::offline_expert(options.threads)
@@ -49,6 +52,19 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
   std::string known;
   for (const auto& n : planner_names()) known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown planner \"" + name + "\" (known: " + known + ")");
+}
+
+}  // namespace
+
+std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options) {
+  std::unique_ptr<Planner> planner = make_bare_planner(name, options);
+  if (!options.shield) return planner;
+  safety::Settings s;
+  s.response_time = options.response_time;
+  s.latency = options.latency;
+  s.period = options.planning_period;
+  s.accel_max = options.accel_max;
+  return safety::make_shielded(std::move(planner), s);
 }
 
 }  // namespace occtrack::planners

@@ -87,6 +87,7 @@ struct LearnedPolicy::Impl {
   Eigen::RowVectorXf robot_velocity, target, obstacles;
   Eigen::RowVectorXd xi, nominal, line;
   std::vector<double> costs;
+  std::vector<int> order;  // rank_commands' workspace
   std::vector<char> usable;
   // The last plan (robot-centric at last_origin), for keep_last_plan.
   Eigen::RowVectorXd last, warm, stop;
@@ -321,6 +322,8 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
   out.candidates.resize(shown);  // storage of earlier cycles is reused
   for (int b = 0, c = 0; b < kept; ++b)
     if (s.usable[b] && std::isfinite(s.costs[b])) s.context.world_positions(candidate(b), frame, out.candidates[c++]);
+  // Every ranked candidate's command, cheapest first, for the safety layer.
+  detail::rank_commands(s.costs, s.order, [&](int b) { return s.context.command(candidate(b)); }, out.ranked_commands);
   s.timing.ranking = ms_between(projected, Clock::now());
   s.context.finish_plan(out, s.record, clock, s.last, best_terms);
   s.timing.total = out.compute_ms;

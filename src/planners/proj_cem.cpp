@@ -152,6 +152,15 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
     s.scored = s.optimizer.result.xi.row(c).cast<double>();
     s.context.world_positions(s.scored, frame, out.candidates[static_cast<std::size_t>(c)]);
   }
+  // The last iteration's candidates, cheapest first, for the safety layer (the best of all first).
+  detail::rank_commands(
+      s.costs, s.order,
+      [&](int b) {
+        s.scored = s.optimizer.result.xi.row(b).cast<double>();
+        return s.context.command(s.scored);
+      },
+      out.ranked_commands);
+  out.ranked_commands.insert(out.ranked_commands.begin(), s.context.command(s.best));
   s.previous = s.best;
   s.previous_origin = frame.origin;
   s.previous_time = frame.time;

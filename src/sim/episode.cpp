@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "occtrack/core/robot_response.hpp"
 #include "occtrack/core/timing.hpp"
 #include "occtrack/sim/metrics.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
@@ -97,7 +98,8 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
   const int delay_steps = latency_steps(settings);
   // Velocity lag (Protocol v2): the exact solution of dv/dt = (command - v) / tau over one step, the
   // acceleration bound applied after it.
-  const double lag = settings.tau > 0.0 ? -std::expm1(-dt / settings.tau) : 1.0;
+  const core::RobotResponse response{settings.tau, settings.robot_accel_max, dt};
+  const double lag = response.lag(), limit = response.limit();
   const double sensor_range = world.scenario().sensor.range;
 
   EpisodeResult result;
@@ -177,6 +179,7 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
       Vec2 next = out.command_velocity;
       const bool failed = !out.ok || !next.allFinite();
       metrics.add_cycle(out.compute_ms, failed);
+      metrics.add_safety(out.safety);
       if (failed) next = Vec2::Zero();  // brake: never pass a non-finite command on
       if (settings.latency_ms) {
         // Protocol v2: the command applies L after the scan; the next cycle starts at the first planning
@@ -202,10 +205,7 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
 
     // Robot: velocity follows the command (through the lag when tau > 0) under the acceleration bound;
     // position integrates it.
-    Vec2 change = command - velocity;
-    if (settings.tau > 0.0) change *= lag;
-    const double limit = settings.robot_accel_max * dt;
-    if (change.norm() > limit) change *= limit / change.norm();
+    const Vec2 change = core::velocity_change(velocity, command, lag, limit);
     velocity += change;
     position += velocity * dt;
     metrics.add_acceleration(change.norm() / dt);

@@ -50,6 +50,18 @@ void EpisodeMetricsAccumulator::add_cycle(double compute_ms, bool failed) {
   if (failed) ++m_.planner_failures;
 }
 
+void EpisodeMetricsAccumulator::add_safety(planners::SafetyAction action) {
+  using planners::SafetyAction;
+  switch (action) {
+    case SafetyAction::off: break;
+    case SafetyAction::plan: ++m_.shield.plan; break;
+    case SafetyAction::alternative: ++m_.shield.alternative; break;
+    case SafetyAction::stop: ++m_.shield.stop; break;
+    case SafetyAction::evasive: ++m_.shield.evasive; break;
+    case SafetyAction::brake: ++m_.shield.brake; break;
+  }
+}
+
 void EpisodeMetricsAccumulator::add_acceleration(double norm) {
   acceleration_sum_ += norm;
   m_.acceleration.min = std::min(m_.acceleration.min, norm);
@@ -103,6 +115,11 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
     s.tracking_in_band_share += e.tracking_in_band_share * e.duration_s;
     s.target_out_of_range_s += e.target_out_of_range_s;
     s.planner_failures += e.planner_failures;
+    s.shield.plan += e.shield.plan;
+    s.shield.alternative += e.shield.alternative;
+    s.shield.stop += e.shield.stop;
+    s.shield.evasive += e.shield.evasive;
+    s.shield.brake += e.shield.brake;
     s.cycles += e.cycles;
     s.occlusion_stretches += e.occlusion_stretches;
     s.longest_occlusion_s = std::max(s.longest_occlusion_s, e.longest_occlusion_s);

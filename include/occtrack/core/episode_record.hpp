@@ -15,6 +15,12 @@ struct Summary3 {
   double mean = 0, min = 0, max = 0;
 };
 
+/// Cycles by what the safety layer did (planners::SafetyAction; all zero without it).
+struct ShieldCounts {
+  int plan = 0, alternative = 0, stop = 0, evasive = 0, brake = 0;
+  int total() const { return plan + alternative + stop + evasive + brake; }
+};
+
 /// Per-episode metrics, with the spec's keys (io/results.hpp writes the JSON).
 struct EpisodeMetrics {
   std::string scenario, planner;
@@ -37,6 +43,7 @@ struct EpisodeMetrics {
   double compute_scale = 1;
   int occlusion_stretches = 0;
   double longest_occlusion_s = 0;
+  ShieldCounts shield;  ///< issue 11's safety layer; written to the JSON only when it ran
 };
 
 /// A suite's episodes and their summary (sim::summarize_suite makes it, io/results.hpp writes it).

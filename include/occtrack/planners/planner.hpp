@@ -31,6 +31,16 @@ struct PlannerInput {
   const core::Scan* scan = nullptr;     ///< the latest scan; must not be null
 };
 
+/// What the safety layer did with a cycle's command (planners/safety.hpp; the metrics count each).
+enum class SafetyAction {
+  off,          ///< no safety layer (--no-shield, or a planner used directly)
+  plan,         ///< the planner's own command was certified
+  alternative,  ///< a lower-ranked candidate of the planner was the best certified one
+  stop,         ///< no candidate was certified; braking to a stop was
+  evasive,      ///< neither; a certified evasive command (away from approaching obstacles) was sent
+  brake,        ///< nothing could be certified: full brake (command zero)
+};
+
 struct PlannerOutput {
   Vec2 command_velocity = Vec2::Zero();  ///< world frame; always finite
   std::vector<Vec2> plan;                ///< the chosen trajectory, world frame, one point per step
@@ -38,6 +48,10 @@ struct PlannerOutput {
   double compute_ms = 0.0;               ///< wall time of plan(), filled by the planner
   bool ok = true;       ///< false: no usable plan; the command brakes (zero velocity) and `message` says why
   std::string message;
+  /// The commands of the planner's ranked candidates, best first (the chosen one included), for the safety
+  /// layer to fall back on; planners that do not rank leave it empty.
+  std::vector<Vec2> ranked_commands;
+  SafetyAction safety = SafetyAction::off;
 };
 
 /// One cycle's robot-centric view, as perception and the frame change make it: the robot is at the origin,
@@ -106,6 +120,12 @@ struct PlannerOptions {
   /// s, the robot's velocity time constant: commands lead the plan by it (Protocol v2's tau; 0: v1).
   double response_time = 0.0;
   int waypoints = 0;  ///< AutoChaser: true future target points given as prior (0: constant-velocity prediction)
+  /// The safety layer (planners/safety.hpp) around the planner. Off by default until issue 11's measurements
+  /// are in (docs/safety.md); off reproduces the planners of before it exactly.
+  bool shield = false;
+  double latency = 0.0;          ///< s, command latency the safety layer allows for (Protocol v2)
+  double planning_period = 0.05; ///< s between cycles, for the safety layer
+  double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".

@@ -8,6 +8,7 @@
 
 #include "occtrack/core/episode_record.hpp"
 #include "occtrack/core/tracking.hpp"
+#include "occtrack/planners/planner.hpp"
 
 namespace occtrack::sim {
 
@@ -27,6 +28,8 @@ class EpisodeMetricsAccumulator {
   void add_state(double clearance, bool occluded, double distance, bool last);
   /// One planning cycle: its computation time, and whether the planner gave no usable command.
   void add_cycle(double compute_ms, bool failed);
+  /// What the safety layer did with the cycle's command (nothing counted for SafetyAction::off).
+  void add_safety(planners::SafetyAction action);
   /// The norm of the robot's realised acceleration over one physics step (m/s^2).
   void add_acceleration(double norm);
 

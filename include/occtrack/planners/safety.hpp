@@ -1,0 +1,127 @@
+// The safety layer every planner goes through (issue 11; docs/safety.md): a command is sent only when it is
+// certified to leave the robot able to stop in space the scan shows free, clear of the moving obstacles'
+// predicted paths.
+//
+//   safety::FreeSpace free;        // per scan: what the LiDAR shows free
+//   free.build(scan);
+//   free.disk_free(p, 0.3);        // is the 0.3 m disk around p (robot-centric) known free?
+//
+//   safety::Certifier certifier(settings);
+//   certifier.begin(scan, robot_velocity, previous_command, moving_points);
+//   certifier.certify(command);    // hold it, then brake: stays in known free space and clear?
+//
+// make_shielded() wraps any planner: it certifies the planner's command, else its lower-ranked candidates
+// (PlannerOutput::ranked_commands), else a certified stop or evasive manoeuvre, else brakes in full, and says
+// which in PlannerOutput::safety.
+//
+// Frames: robot-centric positions (the robot at the origin at scan time, axes of the world), world velocities.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "occtrack/core/robot_response.hpp"
+#include "occtrack/core/scan.hpp"
+#include "occtrack/planners/planner.hpp"
+
+namespace occtrack::planners::safety {
+
+struct Settings {
+  double robot_radius = 0.25;  ///< m; the robot's own size (run_episode's use_prior sets the scenario's)
+  double margin = 0.05;        ///< m kept free beyond the radius (absorbs the check's time resolution)
+  double accel_max = 2.0;      ///< m/s^2, the robot's acceleration bound
+  double response_time = 0.0;  ///< s, the robot's velocity lag (Protocol v2's tau)
+  double latency = 0.0;        ///< s from the scan until a command takes effect (Protocol v2's latency)
+  double period = 0.05;        ///< s between planning cycles
+  double speed_max = 2.0;      ///< m/s, fastest evasive command
+  double step = 0.01;          ///< s, integration step of the certification (the simulator's physics step)
+  double check_spacing = 0.02; ///< m the robot may travel between two checks (at most 0.1 s apart)
+  double moving_horizon = 2.0; ///< s after the scan through which moving points are followed
+  double horizon = 6.0;        ///< s; a manoeuvre that has not stopped by then is not certified
+  int evasive_directions = 16; ///< evasive commands: this many directions at speed_max and half of it, each
+                               ///< held 0.5, 1 or 1.5 s before braking
+
+  /// True when every field is usable; otherwise false with *error naming the field.
+  bool validate(std::string* error = nullptr) const;
+  /// The clearance a certified manoeuvre keeps: robot_radius + margin.
+  double clearance() const { return robot_radius + margin; }
+};
+
+/// What the LiDAR shows free. A beam that returns r shows the segment from the robot to r free; a beam with
+/// no return (+infinity or beyond range_max) shows it free to range_max; a NaN or non-positive range shows
+/// nothing. Between two adjacent beams the free radius is the smaller of their two (the issue's "closer than
+/// the return at its bearing and its neighbours"): the known-free region is the union of these circular
+/// sectors, and space behind returns, beyond range or outside the scan's field of view is not known free.
+class FreeSpace {
+ public:
+  /// Reads the scan. Allocates only when a scan has more beams than any before.
+  void build(const core::Scan& scan);
+  /// True when the whole disk of radius `clearance` around p (robot-centric) lies in the known-free region.
+  bool disk_free(const Eigen::Vector2d& p, double clearance) const;
+  /// The smallest free radius over all directions (0 with no usable beam).
+  double nearest() const { return nearest_; }
+
+ private:
+  bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
+  double window_min(long lo, long hi) const;
+
+  int beams_ = 0;
+  bool full_circle_ = false;
+  double angle_min_ = 0.0, increment_ = 0.0, range_max_ = 0.0;
+  double nearest_ = 0.0;
+  std::vector<double> sector_;  // free radius of sector k (between beams k and k+1), twice for wrap-around
+  std::vector<double> table_;   // sparse table of minima over sector_, level by level
+  int levels_ = 0;
+};
+
+/// A moving obstacle point: robot-centric position at scan time, world velocity.
+struct MovingPoint {
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
+};
+
+/// Certifies commands. A command u is certified when the robot, starting at the origin with its measured
+/// velocity, under the previous command until the latency has passed, then under u for one replanning interval
+/// (the period, or the latency rounded up to whole periods when longer), then braking (command zero) through
+/// the response lag and acceleration bound until it stops, keeps its clearance disk in the scan's known-free
+/// space and away from every moving point predicted at constant velocity through moving_horizon.
+/// If the robot is already closer than the clearance to something, the clearance shrinks to what it has now
+/// (less 5 mm), so that moving away is certifiable and moving closer is not.
+class Certifier {
+ public:
+  explicit Certifier(const Settings& settings);
+  const Settings& settings() const { return settings_; }
+  void set_robot_radius(double radius) { settings_.robot_radius = radius; }
+
+  /// Starts a cycle. `moving` are copied (allocates only when there are more than ever before).
+  void begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity, const Eigen::Vector2d& previous_command,
+             const std::vector<MovingPoint>& moving);
+  /// True when `command` is certified (see the class comment). *min_distance, when given, receives the
+  /// smallest distance between the robot's centre and a moving point over the manoeuvre (+infinity without).
+  bool certify(const Eigen::Vector2d& command, double* min_distance = nullptr) const {
+    return certify_held(command, hold(), min_distance);
+  }
+  /// The same with the command held for `hold_time` (at least hold()) before braking: an evasive manoeuvre,
+  /// whose contingency is its own continuation rather than braking at the next cycle.
+  bool certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance = nullptr) const;
+  /// The clearance this cycle certifies with (see the class comment).
+  double clearance() const { return clearance_; }
+  /// The time the candidate command is held: the replanning interval.
+  double hold() const;
+  const FreeSpace& free_space() const { return free_; }
+
+ private:
+  Settings settings_;
+  FreeSpace free_;
+  Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
+  std::vector<MovingPoint> moving_;
+  double clearance_ = 0.0;
+};
+
+/// Wraps `inner` with the safety layer. The wrapper keeps the inner planner's name; its use_prior() takes the
+/// robot's radius from the scenario. Throws std::invalid_argument on invalid settings.
+std::unique_ptr<Planner> make_shielded(std::unique_ptr<Planner> inner, const Settings& settings);
+
+}  // namespace occtrack::planners::safety

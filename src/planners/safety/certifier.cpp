@@ -1,0 +1,106 @@
+// Certification of a command (planners/safety.hpp): hold it for one replanning interval after the latency,
+// then brake, through the robot's response; the clearance disk must stay in known-free space and clear of the
+// moving points' predicted positions.
+#include <algorithm>
+#include <cmath>
+
+#include "../../core/settings_checker.hpp"
+#include "occtrack/planners/safety.hpp"
+
+namespace occtrack::planners::safety {
+
+bool Settings::validate(std::string* error) const {
+  occtrack::detail::SettingsChecker c;
+  c.positive(robot_radius, "robot_radius");
+  c.non_negative(margin, "margin");
+  c.positive(accel_max, "accel_max");
+  c.non_negative(response_time, "response_time");
+  c.non_negative(latency, "latency");
+  c.positive(period, "period");
+  c.positive(speed_max, "speed_max");
+  c.positive(step, "step");
+  c.require(step <= period, "step (", step, ") must not exceed period (", period, ")");
+  c.positive(check_spacing, "check_spacing");
+  c.non_negative(moving_horizon, "moving_horizon");
+  c.positive(horizon, "horizon");
+  c.require(horizon / step <= 1e6, "horizon / step (", horizon / step, ") must be at most 1e6 steps");
+  c.require(evasive_directions >= 0 && evasive_directions <= 360, "evasive_directions (", evasive_directions,
+            ") must lie in [0, 360]");
+  return c.done(error);
+}
+
+Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
+  moving_.reserve(64);  // perception's nearest points (60 by default): no allocation while cycles run
+}
+
+double Certifier::hold() const {
+  // The next cycle starts at the first planning tick at or after the latency (at least one period on), and
+  // its command takes effect the latency after that (sim::run_episode).
+  const double P = settings_.period, L = settings_.latency;
+  return std::max(P, std::ceil(L / P - 1e-9) * P);
+}
+
+void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity,
+                      const Eigen::Vector2d& previous_command, const std::vector<MovingPoint>& moving) {
+  free_.build(scan);
+  velocity_ = robot_velocity.allFinite() ? robot_velocity : Eigen::Vector2d::Zero();
+  previous_ = previous_command.allFinite() ? previous_command : Eigen::Vector2d::Zero();
+  // Only the moving points that could come near: the robot cannot get farther than `reach` from here.
+  const double fastest = std::max({velocity_.norm(), previous_.norm(), settings_.speed_max});
+  const double reach = fastest * (settings_.latency + hold() + settings_.response_time + fastest / settings_.accel_max) +
+                       settings_.clearance() + 0.5;
+  moving_.clear();
+  double nearest_moving = INFINITY;
+  for (const MovingPoint& m : moving) {
+    if (!m.position.allFinite() || !m.velocity.allFinite()) continue;
+    const double distance = m.position.norm();
+    if (distance - m.velocity.norm() * settings_.moving_horizon > reach) continue;
+    moving_.push_back(m);
+    nearest_moving = std::min(nearest_moving, distance);
+  }
+  // Already closer than the clearance to something: certify against what the robot has now, so that moving
+  // away is possible and moving closer is not.
+  clearance_ = std::max(0.0, std::min({settings_.clearance(), free_.nearest() - 0.005, nearest_moving - 0.005}));
+}
+
+bool Certifier::certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance) const {
+  if (min_distance) *min_distance = INFINITY;
+  // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
+  if (!command.allFinite() || !std::isfinite(hold_time) || !(clearance_ > 0.0)) return false;
+  const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
+  const double lag = response.lag(), limit = response.limit(), dt = settings_.step;
+  const double L = settings_.latency, hold_end = L + std::max(hold(), hold_time);
+  // Between two checks the robot travels at most check_spacing, and no more than this much time passes.
+  const double max_gap = moving_.empty() ? 0.1 : 0.02;
+  const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
+  Eigen::Vector2d p = zero, v = velocity_;
+  double travelled = 0.0, since_check = 0.0;
+  const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
+  for (long k = 0; k < steps; ++k) {
+    const double t = k * dt;  // the step's start; its command
+    const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
+    v += core::velocity_change(v, *u, lag, limit);
+    p += v * dt;
+    travelled += v.norm() * dt;
+    since_check += dt;
+    const double now = t + dt;
+    const bool braking = now >= hold_end - 1e-12;
+    const bool stopped = braking && v.norm() < 5e-3;
+    const bool watching = !moving_.empty() && now <= settings_.moving_horizon + 1e-12;
+    const bool done = stopped && !watching;
+    if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !done) continue;
+    travelled = since_check = 0.0;
+    if (!free_.disk_free(p, clearance_)) return false;
+    for (const MovingPoint& m : moving_) {
+      if (now > settings_.moving_horizon + 1e-12) break;
+      const double distance = (p - (m.position + m.velocity * now)).norm();
+      if (min_distance) *min_distance = std::min(*min_distance, distance);
+      if (distance < clearance_) return false;
+    }
+    // Stopped: what is left to travel is below v * (tau + step), well inside the margin.
+    if (done) return true;
+  }
+  return false;  // still moving at the horizon
+}
+
+}  // namespace occtrack::planners::safety

@@ -1,0 +1,134 @@
+// What the LiDAR shows free (planners/safety.hpp): the union of circular sectors between adjacent beams, each
+// of the smaller of its two beams' free radii, and the exact test of a disk against it.
+#include <algorithm>
+#include <cmath>
+
+#include "occtrack/planners/safety.hpp"
+
+namespace occtrack::planners::safety {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * M_PI;
+
+/// The free radius a beam shows: its range, range_max without a return, nothing (0) for an unusable value.
+double free_radius(double range, double range_max) {
+  if (std::isnan(range) || range <= 0.0) return 0.0;
+  return std::min(range, range_max);  // +infinity and ranges beyond range_max: no return
+}
+
+/// Farthest point of the disk (centre at distance d, radius c) along a bearing delta radians off the
+/// centre's, from the robot: d cos(delta) + sqrt(c^2 - d^2 sin^2(delta)). Callers keep delta inside the disk's
+/// angular span (or d <= c, where every bearing crosses it).
+double far_intersection(double d, double c, double delta) {
+  const double s = d * std::sin(delta);
+  return d * std::cos(delta) + std::sqrt(std::max(0.0, c * c - s * s));
+}
+
+}  // namespace
+
+void FreeSpace::build(const core::Scan& scan) {
+  beams_ = 0;
+  nearest_ = 0.0;
+  const int n = static_cast<int>(scan.ranges.size());
+  if (n < 2 || !(std::isfinite(scan.angle_min) && std::isfinite(scan.angle_increment) && scan.angle_increment > 0.0) ||
+      !(std::isfinite(scan.range_max) && scan.range_max > 0.0))
+    return;  // nothing is known free
+  angle_min_ = scan.angle_min;
+  increment_ = scan.angle_increment;
+  range_max_ = scan.range_max;
+  full_circle_ = std::abs(n * increment_ - kTwoPi) <= 1e-6 * kTwoPi;
+  const int sectors = full_circle_ ? n : n - 1;
+  // Sector k lies between beams k and k + 1 (beam n - 1 and beam 0 close the circle); twice over for a full
+  // circle, so that a window across the wrap-around is one contiguous range.
+  const int stored = full_circle_ ? 2 * sectors : sectors;
+  sector_.resize(static_cast<std::size_t>(stored));
+  nearest_ = INFINITY;
+  for (int k = 0; k < sectors; ++k) {
+    const double a = free_radius(scan.ranges[static_cast<std::size_t>(k)], range_max_);
+    const double b = free_radius(scan.ranges[static_cast<std::size_t>((k + 1) % n)], range_max_);
+    sector_[static_cast<std::size_t>(k)] = std::min(a, b);
+    nearest_ = std::min(nearest_, sector_[static_cast<std::size_t>(k)]);
+  }
+  if (full_circle_) std::copy_n(sector_.begin(), sectors, sector_.begin() + sectors);
+  // Sparse table: level j holds the minimum over 2^j consecutive sectors from each index.
+  levels_ = 1;
+  while ((1 << levels_) <= stored) ++levels_;
+  table_.resize(static_cast<std::size_t>(levels_) * stored);
+  std::copy(sector_.begin(), sector_.end(), table_.begin());
+  for (int j = 1; j < levels_; ++j) {
+    const double* below = table_.data() + static_cast<std::size_t>(j - 1) * stored;
+    double* level = table_.data() + static_cast<std::size_t>(j) * stored;
+    const int half = 1 << (j - 1);
+    for (int i = 0; i < stored; ++i) level[i] = i + half < stored ? std::min(below[i], below[i + half]) : below[i];
+  }
+  beams_ = n;
+}
+
+double FreeSpace::window_min(long lo, long hi) const {
+  const long stored = static_cast<long>(sector_.size());
+  const long length = hi - lo + 1;
+  int j = 0;
+  while ((2L << j) <= length) ++j;
+  const double* level = table_.data() + static_cast<std::size_t>(j) * stored;
+  return std::min(level[lo], level[hi - (1L << j) + 1]);
+}
+
+bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
+  if (beams_ == 0 || !p.allFinite() || !(clearance >= 0.0) || !std::isfinite(clearance)) return false;
+  const int sectors = full_circle_ ? beams_ : beams_ - 1;
+  const double d = p.norm();
+  // u: the centre's bearing in sector units from beam 0, in [0, 2 pi / increment).
+  double bearing = std::atan2(p.y(), p.x()) - angle_min_;
+  bearing -= kTwoPi * std::floor(bearing / kTwoPi);
+  const double u = bearing / increment_;
+  if (d <= clearance) {  // the disk holds the robot: every direction crosses it
+    if (!full_circle_) return false;
+    if (nearest_ >= d + clearance) return true;
+    return exact(p, d, clearance, u, INFINITY);
+  }
+  const double half_width = std::asin(clearance / d) / increment_;  // the disk's angular half-span, in sectors
+  long lo = static_cast<long>(std::floor(u - half_width));
+  long hi = static_cast<long>(std::floor(u + half_width));
+  if (full_circle_) {
+    if (hi - lo + 1 >= sectors) {
+      if (nearest_ >= d + clearance) return true;
+      return exact(p, d, clearance, u, INFINITY);
+    }
+    const long shift = lo < 0 ? sectors : (lo >= sectors ? -sectors : 0);
+    lo += shift;
+    hi += shift;
+  } else if (lo < 0 || hi > sectors - 1) {
+    return false;  // part of the disk lies outside the field of view
+  }
+  // Fast: every sector the disk crosses reaches beyond the disk's farthest point.
+  if (window_min(lo, hi) >= d + clearance) return true;
+  return exact(p, d, clearance, u, half_width);
+}
+
+bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, double u, double half_width) const {
+  const int sectors = full_circle_ ? beams_ : beams_ - 1;
+  const double period = full_circle_ ? static_cast<double>(beams_) : INFINITY;
+  long lo = 0, hi = sectors - 1;
+  if (std::isfinite(half_width)) {
+    lo = static_cast<long>(std::floor(u - half_width));
+    hi = static_cast<long>(std::floor(u + half_width));
+  }
+  for (long k = lo; k <= hi; ++k) {
+    // Angular distance (in sectors) from the centre's bearing to sector k, [k, k + 1].
+    double w = u - static_cast<double>(k);
+    if (std::isfinite(period)) w -= period * std::floor(w / period);  // into [0, period)
+    double gap = 0.0;
+    if (w > 1.0) gap = std::isfinite(period) ? std::min(w - 1.0, period - w) : w - 1.0;
+    if (w < 0.0) gap = -w;
+    const double delta = gap * increment_;
+    if (d > clearance && delta > std::asin(clearance / d)) continue;  // the disk does not reach into it
+    long index = k % sectors;
+    if (index < 0) index += sectors;
+    if (sector_[static_cast<std::size_t>(index)] < far_intersection(d, clearance, std::min(delta, M_PI)))
+      return false;
+  }
+  return true;
+}
+
+}  // namespace occtrack::planners::safety

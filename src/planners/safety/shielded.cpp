@@ -1,0 +1,136 @@
+// The safety layer around a planner (planners/safety.hpp): certify the planner's command, else its lower-ranked
+// candidates, else a stop or an evasive command, else brake in full.
+#include <chrono>
+#include <cmath>
+
+#include "occtrack/perception/perception.hpp"
+#include "occtrack/planners/safety.hpp"
+
+namespace occtrack::planners::safety {
+
+namespace {
+
+class Shielded final : public Planner {
+ public:
+  Shielded(std::unique_ptr<Planner> inner, const Settings& settings)
+      : inner_(std::move(inner)), certifier_(settings), perception_(perception::Settings::tracking()) {
+    if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
+    moving_.reserve(static_cast<std::size_t>(perception::Settings::tracking().nearest_count));
+  }
+
+  std::string name() const override { return inner_->name(); }
+  void reset() override {
+    inner_->reset();
+    perception_.reset();
+    has_previous_ = false;
+    evasive_left_ = 0.0;
+  }
+  void use_prior(const core::Scenario& scenario) override {
+    if (std::isfinite(scenario.robot_radius) && scenario.robot_radius > 0.0)
+      certifier_.set_robot_radius(scenario.robot_radius);
+    inner_->use_prior(scenario);
+  }
+  const PlanRecord& last_record() const override { return inner_->last_record(); }
+
+  void plan(const PlannerInput& input, PlannerOutput& out) override {
+    out.ranked_commands.clear();
+    inner_->plan(input, out);
+    const auto start = std::chrono::steady_clock::now();
+    choose(input, out);
+    out.compute_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+
+ private:
+  void choose(const PlannerInput& input, PlannerOutput& out) {
+    const Eigen::Vector2d planned = out.command_velocity;
+    out.command_velocity.setZero();
+    out.safety = SafetyAction::brake;
+    if (input.scan == nullptr || !input.robot_position.allFinite() || !input.robot_velocity.allFinite()) {
+      remember(out);
+      return;  // nothing to certify against: full brake
+    }
+    moving_.clear();
+    if (perception_.process(*input.scan, input.robot_position, observation_, nullptr)) {
+      const auto& nearest = observation_.nearest;
+      for (Eigen::Index i = 0; i < nearest.rows(); ++i)
+        if (nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0)
+          moving_.push_back({Eigen::Vector2d(nearest(i, 0), nearest(i, 1)), Eigen::Vector2d(nearest(i, 2), nearest(i, 3))});
+    }
+    certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_);
+
+    // 1. The planner's command, then its other candidates in rank order.
+    if (out.ok && planned.allFinite()) {
+      if (certifier_.certify(planned)) return send(out, planned, SafetyAction::plan);
+      for (const Vec2& c : out.ranked_commands)
+        if (c != planned && certifier_.certify(c)) return send(out, c, SafetyAction::alternative);
+    }
+    // 2. A stop; else the evasive manoeuvre under way, if still certified; else the evasive manoeuvre that
+    //    keeps farthest from moving points (closest to the planner's wish when nothing moves).
+    if (certifier_.certify(Eigen::Vector2d::Zero())) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+    const double interval = certifier_.hold();
+    if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
+      out.ok = true;
+      evasive_left_ -= interval;
+      return send(out, evasive_, SafetyAction::evasive);
+    }
+    const Settings& s = certifier_.settings();
+    const Eigen::Vector2d wish = out.ok && planned.allFinite() ? planned : Eigen::Vector2d::Zero();
+    Eigen::Vector2d best = Eigen::Vector2d::Zero();
+    double best_distance = -INFINITY, best_gap = INFINITY, best_hold = 0.0;
+    bool found = false;
+    for (const double hold : {0.5, 1.0, 1.5})
+      for (const double share : {1.0, 0.5})
+        for (int i = 0; i < s.evasive_directions; ++i) {
+          const double angle = 2.0 * M_PI * i / s.evasive_directions;
+          const Eigen::Vector2d c = share * s.speed_max * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+          double distance = INFINITY;
+          if (!certifier_.certify_held(c, hold, &distance)) continue;
+          const double gap = (c - wish).norm();
+          if (!found || distance > best_distance + 1e-9 || (distance >= best_distance - 1e-9 && gap < best_gap)) {
+            best = c;
+            best_distance = distance;
+            best_gap = gap;
+            best_hold = hold;
+            found = true;
+          }
+        }
+    if (found) {
+      out.ok = true;  // the robot has a usable command, whatever the planner managed
+      evasive_ = best;
+      evasive_left_ = std::max(best_hold, interval);
+      return send(out, best, SafetyAction::evasive);
+    }
+    evasive_left_ = 0.0;
+    remember(out);  // 3. full brake (command zero), uncertified
+  }
+
+  void send(PlannerOutput& out, const Eigen::Vector2d& command, SafetyAction action) {
+    if (action != SafetyAction::evasive) evasive_left_ = 0.0;  // a manoeuvre under way ends here
+    out.command_velocity = command;
+    out.safety = action;
+    remember(out);
+  }
+  void remember(const PlannerOutput& out) {
+    previous_ = out.command_velocity;
+    has_previous_ = true;
+  }
+
+  std::unique_ptr<Planner> inner_;
+  Certifier certifier_;
+  perception::Perception perception_;
+  perception::Observation observation_;
+  std::vector<MovingPoint> moving_;
+  Eigen::Vector2d previous_ = Eigen::Vector2d::Zero();
+  bool has_previous_ = false;
+  Eigen::Vector2d evasive_ = Eigen::Vector2d::Zero();  // the evasive manoeuvre under way
+  double evasive_left_ = 0.0;                           // s it still holds its command
+
+};
+
+}  // namespace
+
+std::unique_ptr<Planner> make_shielded(std::unique_ptr<Planner> inner, const Settings& settings) {
+  return std::make_unique<Shielded>(std::move(inner), settings);
+}
+
+}  // namespace occtrack::planners::safety
