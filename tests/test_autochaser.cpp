@@ -11,6 +11,7 @@
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/geometry.hpp"
+#include "test_helpers.hpp"
 
 using namespace occtrack;
 using planners::AutoChaserSettings;
@@ -19,13 +20,7 @@ namespace ac = planners::autochaser;
 
 namespace {
 
-core::ObstacleSpec box(Vec2 center, Vec2 size) {
-  core::ObstacleSpec o;
-  o.shape = core::ObstacleSpec::Shape::box;
-  o.center = center;
-  o.size = size;
-  return o;
-}
+using occtrack::test::box;
 
 /// One wall, x in [1.3, 1.7], y in [-1, 1].
 core::Scenario wall_world() {
@@ -303,9 +298,11 @@ TEST(AutoChaser, CorridorQpKeepsTightCorridorsAndStaysContinuous) {
       worst_tight = std::max(worst_tight, off_tight.cwiseAbs().maxCoeff());
       worst_loose = std::max(worst_loose, (loose.derivative((s + f) * T, 0) - line).cwiseAbs().maxCoeff());
     }
-    if (s + 1 < 3)  // continuity at the knot (both sides of it)
-      for (int r = 0; r < 3; ++r)
+    if (s + 1 < 3) {  // continuity at the knot (both sides of it)
+      for (int r = 0; r < 3; ++r) {
         EXPECT_LT((tight.derivative((s + 1) * T - 1e-9, r) - tight.derivative((s + 1) * T + 1e-9, r)).norm(), 1e-6);
+      }
+    }
   }
   EXPECT_GT(worst_loose, 0.2) << "the example must need its corridors";
   EXPECT_LE(worst_tight, 0.05 + 1e-9);

@@ -9,9 +9,19 @@
 #include <string>
 #include <vector>
 
+#include "occtrack/core/scenario.hpp"
 #include "occtrack/projection/projector.hpp"
 
 namespace occtrack::test {
+
+/// An axis-aligned static box obstacle (yaw 0) of full extent `size` centred at `center`.
+inline core::ObstacleSpec box(const core::Vec2& center, const core::Vec2& size) {
+  core::ObstacleSpec o;
+  o.shape = core::ObstacleSpec::Shape::box;
+  o.center = center;
+  o.size = size;
+  return o;
+}
 
 #ifdef OCCTRACK_CONFORMANCE_DIRS
 /// The conformance case files (*.json) of the folders in OCCTRACK_CONFORMANCE_DIRS ('|'-separated; missing

@@ -13,9 +13,12 @@
 #include "occtrack/planners/safety.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/world.hpp"
+#include "test_helpers.hpp"
 
 namespace occtrack {
 namespace {
+
+using test::box;
 
 using core::Vec2;
 using planners::safety::Certifier;
@@ -52,14 +55,6 @@ core::Scan world_scan(const std::vector<core::ObstacleSpec>& obstacles, const Ve
   sim::World world(s);
   std::mt19937_64 rng(1);
   return world.scan(at, 0.0, rng);
-}
-
-core::ObstacleSpec box(Vec2 center, Vec2 size) {
-  core::ObstacleSpec o;
-  o.shape = core::ObstacleSpec::Shape::box;
-  o.center = center;
-  o.size = size;
-  return o;
 }
 
 TEST(FreeSpace, WallAheadIsFreeUpToTheWallLessTheClearance) {
