@@ -205,6 +205,17 @@ TEST(Certifier, MovingPointsAndEvasion) {
   EXPECT_TRUE(c.certify_held(Vec2(0.0, 2.0), 1.0, &distance));
   EXPECT_GE(distance, 0.3);
   EXPECT_FALSE(c.certify_held(Vec2(2.0, 0.0), 1.0));
+  // A point too fast to get away from (4 m/s from 1.5 m): nothing is certified, but the whole story of each
+  // manoeuvre says how close it comes, and stepping aside beats standing still.
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.0), Vec2(-4.0, 0.0)}});
+  const Certifier::Verdict stand = c.check(Vec2::Zero(), c.hold(), true);
+  const Certifier::Verdict aside = c.check(Vec2(0.0, 2.0), 1.0, true);
+  EXPECT_FALSE(stand.certified);
+  EXPECT_FALSE(aside.certified);
+  EXPECT_TRUE(stand.in_free_space);
+  EXPECT_TRUE(aside.in_free_space);
+  EXPECT_NEAR(stand.min_distance, 0.0, 0.05);  // it passes through the robot's centre
+  EXPECT_GT(aside.min_distance, stand.min_distance + 0.05);
   // Receding points do not matter.
   c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.0), Vec2(1.0, 0.0)}});
   EXPECT_TRUE(c.certify(Vec2::Zero()));

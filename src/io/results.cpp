@@ -45,6 +45,7 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
                    {"alternative", m.shield.alternative},
                    {"stop", m.shield.stop},
                    {"evasive", m.shield.evasive},
+                   {"best_effort", m.shield.best_effort},
                    {"brake", m.shield.brake}};
   return j;
 }

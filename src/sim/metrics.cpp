@@ -58,6 +58,7 @@ void EpisodeMetricsAccumulator::add_safety(planners::SafetyAction action) {
     case SafetyAction::alternative: ++m_.shield.alternative; break;
     case SafetyAction::stop: ++m_.shield.stop; break;
     case SafetyAction::evasive: ++m_.shield.evasive; break;
+    case SafetyAction::best_effort: ++m_.shield.best_effort; break;
     case SafetyAction::brake: ++m_.shield.brake; break;
   }
 }
@@ -119,6 +120,7 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
     s.shield.alternative += e.shield.alternative;
     s.shield.stop += e.shield.stop;
     s.shield.evasive += e.shield.evasive;
+    s.shield.best_effort += e.shield.best_effort;
     s.shield.brake += e.shield.brake;
     s.cycles += e.cycles;
     s.occlusion_stretches += e.occlusion_stretches;

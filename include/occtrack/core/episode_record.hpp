@@ -17,8 +17,8 @@ struct Summary3 {
 
 /// Cycles by what the safety layer did (planners::SafetyAction; all zero without it).
 struct ShieldCounts {
-  int plan = 0, alternative = 0, stop = 0, evasive = 0, brake = 0;
-  int total() const { return plan + alternative + stop + evasive + brake; }
+  int plan = 0, alternative = 0, stop = 0, evasive = 0, best_effort = 0, brake = 0;
+  int total() const { return plan + alternative + stop + evasive + best_effort + brake; }
 };
 
 /// Per-episode metrics, with the spec's keys (io/results.hpp writes the JSON).

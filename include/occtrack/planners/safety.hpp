@@ -105,7 +105,21 @@ class Certifier {
   }
   /// The same with the command held for `hold_time` (at least hold()) before braking: an evasive manoeuvre,
   /// whose contingency is its own continuation rather than braking at the next cycle.
-  bool certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance = nullptr) const;
+  bool certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance = nullptr) const {
+    const Verdict v = check(command, hold_time, false);
+    if (min_distance) *min_distance = v.min_distance;
+    return v.certified;
+  }
+  /// The whole story of a manoeuvre: certified; or not, but at least inside known-free space throughout (only
+  /// moving points come too near); and the smallest distance between the robot's centre and a moving point.
+  /// With `to_the_end`, a moving point too near does not stop the simulation, so that min_distance covers the
+  /// whole manoeuvre (the safety layer's best effort when nothing is certified).
+  struct Verdict {
+    bool certified = false;
+    bool in_free_space = false;
+    double min_distance = INFINITY;
+  };
+  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end) const;
   /// The clearance this cycle certifies with (see the class comment).
   double clearance() const { return clearance_; }
   /// The time the candidate command is held: the replanning interval.

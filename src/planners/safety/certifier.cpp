@@ -63,10 +63,10 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   clearance_ = std::max(0.0, std::min({settings_.clearance(), free_.nearest() - 0.005, nearest_moving - 0.005}));
 }
 
-bool Certifier::certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance) const {
-  if (min_distance) *min_distance = INFINITY;
+Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_time, bool to_the_end) const {
+  Verdict verdict;
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
-  if (!command.allFinite() || !std::isfinite(hold_time) || !(clearance_ > 0.0)) return false;
+  if (!command.allFinite() || !std::isfinite(hold_time) || !(clearance_ > 0.0)) return verdict;
   const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
   const double lag = response.lag(), limit = response.limit(), dt = settings_.step;
   const double L = settings_.latency, hold_end = L + std::max(hold(), hold_time);
@@ -75,6 +75,7 @@ bool Certifier::certify_held(const Eigen::Vector2d& command, double hold_time, d
   const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
   Eigen::Vector2d p = zero, v = velocity_;
   double travelled = 0.0, since_check = 0.0;
+  bool too_near = false;
   const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
   for (long k = 0; k < steps; ++k) {
     const double t = k * dt;  // the step's start; its command
@@ -90,17 +91,24 @@ bool Certifier::certify_held(const Eigen::Vector2d& command, double hold_time, d
     const bool done = stopped && !watching;
     if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !done) continue;
     travelled = since_check = 0.0;
-    if (!free_.disk_free(p, clearance_)) return false;
-    for (const MovingPoint& m : moving_) {
-      if (now > settings_.moving_horizon + 1e-12) break;
-      const double distance = (p - (m.position + m.velocity * now)).norm();
-      if (min_distance) *min_distance = std::min(*min_distance, distance);
-      if (distance < clearance_) return false;
-    }
+    if (!free_.disk_free(p, clearance_)) return verdict;  // leaves known-free space: neither
+    if (now <= settings_.moving_horizon + 1e-12)
+      for (const MovingPoint& m : moving_) {
+        const double distance = (p - (m.position + m.velocity * now)).norm();
+        verdict.min_distance = std::min(verdict.min_distance, distance);
+        if (distance < clearance_) {
+          too_near = true;
+          if (!to_the_end) return verdict;
+        }
+      }
     // Stopped: what is left to travel is below v * (tau + step), well inside the margin.
-    if (done) return true;
+    if (done) {
+      verdict.in_free_space = true;
+      verdict.certified = !too_near;
+      return verdict;
+    }
   }
-  return false;  // still moving at the horizon
+  return verdict;  // still moving at the horizon
 }
 
 }  // namespace occtrack::planners::safety

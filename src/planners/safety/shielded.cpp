@@ -75,34 +75,47 @@ class Shielded final : public Planner {
     }
     const Settings& s = certifier_.settings();
     const Eigen::Vector2d wish = out.ok && planned.allFinite() ? planned : Eigen::Vector2d::Zero();
-    Eigen::Vector2d best = Eigen::Vector2d::Zero();
-    double best_distance = -INFINITY, best_gap = INFINITY, best_hold = 0.0;
-    bool found = false;
+    // One pass over the evasive manoeuvres: the best certified one; and, should none be, the best effort, the
+    // manoeuvre that stays in known-free space and keeps farthest from the moving points' predictions.
+    Choice certified, effort;
+    const Certifier::Verdict still = certifier_.check(Eigen::Vector2d::Zero(), interval, true);
+    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, 0.0, interval);
     for (const double hold : {0.5, 1.0, 1.5})
       for (const double share : {1.0, 0.5})
         for (int i = 0; i < s.evasive_directions; ++i) {
           const double angle = 2.0 * M_PI * i / s.evasive_directions;
           const Eigen::Vector2d c = share * s.speed_max * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-          double distance = INFINITY;
-          if (!certifier_.certify_held(c, hold, &distance)) continue;
+          const Certifier::Verdict verdict = certifier_.check(c, hold, true);
+          if (!verdict.in_free_space) continue;
           const double gap = (c - wish).norm();
-          if (!found || distance > best_distance + 1e-9 || (distance >= best_distance - 1e-9 && gap < best_gap)) {
-            best = c;
-            best_distance = distance;
-            best_gap = gap;
-            best_hold = hold;
-            found = true;
-          }
+          if (verdict.certified) certified.offer(c, verdict.min_distance, gap, hold);
+          effort.offer(c, verdict.min_distance, gap, hold);
         }
-    if (found) {
+    const Choice& chosen = certified.found ? certified : effort;
+    if (chosen.found) {
       out.ok = true;  // the robot has a usable command, whatever the planner managed
-      evasive_ = best;
-      evasive_left_ = std::max(best_hold, interval);
-      return send(out, best, SafetyAction::evasive);
+      evasive_ = chosen.command;
+      evasive_left_ = certified.found ? std::max(chosen.hold, interval) : 0.0;
+      return send(out, chosen.command, certified.found ? SafetyAction::evasive : SafetyAction::best_effort);
     }
     evasive_left_ = 0.0;
     remember(out);  // 3. full brake (command zero), uncertified
   }
+
+  /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
+  struct Choice {
+    Eigen::Vector2d command = Eigen::Vector2d::Zero();
+    double distance = -INFINITY, gap = INFINITY, hold = 0.0;
+    bool found = false;
+    void offer(const Eigen::Vector2d& c, double d, double g, double h) {
+      if (found && !(d > distance + 1e-9 || (d >= distance - 1e-9 && g < gap))) return;
+      command = c;
+      distance = d;
+      gap = g;
+      hold = h;
+      found = true;
+    }
+  };
 
   void send(PlannerOutput& out, const Eigen::Vector2d& command, SafetyAction action) {
     if (action != SafetyAction::evasive) evasive_left_ = 0.0;  // a manoeuvre under way ends here
