@@ -1,11 +1,12 @@
 // occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
-//                       [--repeats R] [--scenario FILE] [--seed S] [--json FILE]
+//                       [--repeats R] [--scenario FILE] [--seed S] [--shield] [--json FILE]
 //
 // Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
 // projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
 // (default scenarios/static-1ms/forest-a-1.yaml) and the scans it sees are replayed. Prints the median, p99
 // and mean in milliseconds and the median split per stage. --random times a model with random weights, so
-// that the cost can be measured before a model is trained.
+// that the cost can be measured before a model is trained. --shield puts the safety layer around the policy
+// (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,6 +22,7 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/planners/learned.hpp"
+#include "occtrack/planners/safety.hpp"
 #include "occtrack/policy/model.hpp"
 #include "occtrack/sim/world.hpp"
 
@@ -38,6 +40,7 @@ struct Options {
   int batch = 30;
   bool keep_last_plan = true;
   bool rank_stop = true;
+  bool shield = false;
   int iterations = 50;
   int repeats = 1000;
   double seconds = 5.0;
@@ -124,24 +127,35 @@ int run(const Options& o) {
     model_name = planner->model().source();
   }
 
+  // What runs each cycle: the policy, or the safety layer around it (which then owns it).
+  planners::LearnedPolicy* policy = planner.get();
+  std::unique_ptr<planners::Planner> runner = std::move(planner);
+  if (o.shield) {
+    planners::safety::Settings shield;
+    shield.response_time = 0.25;
+    runner = planners::safety::make_shielded(std::move(runner), shield);
+  }
+
   const Recording rec = record(scenario, o.seconds);
   const int frames = static_cast<int>(rec.inputs.size());
   // Warm-up: one pass, so that every buffer has its size; then the timed cycles, replaying the drive.
-  planner->reset();
-  for (const auto& in : rec.inputs) planner->plan(in);
-  std::vector<double> total, cpu, perception, pointnet, decoder, projection, ranking;
-  for (auto* v : {&total, &cpu, &perception, &pointnet, &decoder, &projection, &ranking}) v->reserve(o.repeats);
+  runner->reset();
+  for (const auto& in : rec.inputs) runner->plan(in);
+  std::vector<double> total, cpu, perception, pointnet, decoder, projection, ranking, safety;
+  for (auto* v : {&total, &cpu, &perception, &pointnet, &decoder, &projection, &ranking, &safety})
+    v->reserve(o.repeats);
   int failed = 0;
   for (int r = 0; r < o.repeats; ++r) {
     const int i = r % frames;
-    if (i == 0) planner->reset();  // scan times must not go backwards
+    if (i == 0) runner->reset();  // scan times must not go backwards
     const double cpu_start = thread_cpu_ms();
     const auto start = std::chrono::steady_clock::now();
-    const planners::PlannerOutput out = planner->plan(rec.inputs[i]);
+    const planners::PlannerOutput out = runner->plan(rec.inputs[i]);
     total.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     cpu.push_back(thread_cpu_ms() - cpu_start);
     if (!out.ok) ++failed;
-    const auto& t = planner->last_timing();
+    const auto& t = policy->last_timing();
+    safety.push_back(o.shield ? out.compute_ms - t.total : 0.0);  // the layer's part of the cycle
     perception.push_back(t.perception);
     pointnet.push_back(t.pointnet);
     decoder.push_back(t.decoder);
@@ -151,15 +165,15 @@ int run(const Options& o) {
   const core::TimingSummary cycle = core::summarize_timings(total), cycle_cpu = core::summarize_timings(cpu);
   const core::TimingSummary sp = core::summarize_timings(perception), sn = core::summarize_timings(pointnet),
                             sd = core::summarize_timings(decoder), sj = core::summarize_timings(projection),
-                            sr = core::summarize_timings(ranking);
+                            sr = core::summarize_timings(ranking), ss = core::summarize_timings(safety);
 
-  const auto& net = planner->model().network();
+  const auto& net = policy->model().network();
   // The rows solved per cycle: the B samples, the last plan and the stop plan (planners/learned.hpp).
   const bool projects = settings.variant != policy::Variant::bc;
   const int rows = o.batch + (o.keep_last_plan ? 1 : 0) + (o.rank_stop && projects ? 1 : 0);
   std::printf("policy %s (%s model), batch %d (%d rows ranked%s%s), %d projection iterations, %d obstacle points, "
               "one core\n",
-              planner->name().c_str(), model_name.c_str(), o.batch, rows, o.keep_last_plan ? ", last plan" : "",
+              policy->name().c_str(), model_name.c_str(), o.batch, rows, o.keep_last_plan ? ", last plan" : "",
               o.rank_stop && projects ? ", stop plan" : "", o.iterations, settings.projection.obstacles);
   std::printf("  network: PointNet widths ");
   for (std::size_t i = 0; i < net.pointnet_widths.size(); ++i)
@@ -172,11 +186,14 @@ int run(const Options& o) {
               cycle_cpu.median, cycle_cpu.p99);
   std::printf("  split (medians): perception %.3f, PointNet %.3f, decoder %.3f, projection %.3f, ranking %.3f ms\n",
               sp.median, sn.median, sd.median, sj.median, sr.median);
+  if (o.shield)
+    std::printf("  safety layer: median %.3f ms, p99 %.3f ms, max %.3f ms of the cycle\n", ss.median, ss.p99, ss.max);
 
   if (!o.json_path.empty()) {
-    const nlohmann::json doc = {
+    nlohmann::json doc = {
         {"benchmark", "policy"},
-        {"planner", planner->name()},
+        {"planner", policy->name()},
+        {"shield", o.shield},
         {"model", model_name},
         {"batch", o.batch},
         {"rows", rows},
@@ -197,6 +214,7 @@ int run(const Options& o) {
         {"split_median_ms",
          {{"perception", sp.median}, {"pointnet", sn.median}, {"decoder", sd.median}, {"projection", sj.median},
           {"ranking", sr.median}}}};
+    if (o.shield) doc["safety_ms"] = {{"median", ss.median}, {"p99", ss.p99}, {"max", ss.max}};
     if (!write_text_file("occtrack bench policy", o.json_path, doc.dump(2) + "\n")) return kExitInputError;
   }
   return kExitOk;
@@ -219,6 +237,8 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
                                                   kDefaultScenario + ")");
   add_bounded_option(cmd, "--seconds", o->seconds, "Seconds of the follower's drive recorded", 0.05, 3600.0);
   cmd->add_option("--seed", o->seed, "Seed of the latent samples (and of the random weights)")->capture_default_str();
+  cmd->add_flag("--shield", o->shield,
+                "Put the safety layer around the policy (response time 0.25 s) and time its share of the cycle");
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
