@@ -62,6 +62,8 @@ class FreeSpace {
   bool disk_free(const Eigen::Vector2d& p, double clearance) const;
   /// The smallest free radius over all directions (0 with no usable beam).
   double nearest() const { return nearest_; }
+  /// The bearing (radians, world axes) of the sector with that smallest radius (0 with no usable beam).
+  double nearest_bearing() const { return nearest_bearing_; }
 
  private:
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
@@ -70,7 +72,7 @@ class FreeSpace {
   int beams_ = 0;
   bool full_circle_ = false;
   double angle_min_ = 0.0, increment_ = 0.0, range_max_ = 0.0;
-  double nearest_ = 0.0;
+  double nearest_ = 0.0, nearest_bearing_ = 0.0;
   std::vector<double> sector_;  // free radius of sector k (between beams k and k+1), twice for wrap-around
   std::vector<double> table_;   // sparse table of minima over sector_, level by level
   int levels_ = 0;

@@ -29,7 +29,7 @@ double far_intersection(double d, double c, double delta) {
 
 void FreeSpace::build(const core::Scan& scan) {
   beams_ = 0;
-  nearest_ = 0.0;
+  nearest_ = nearest_bearing_ = 0.0;
   const int n = static_cast<int>(scan.ranges.size());
   if (n < 2 || !(std::isfinite(scan.angle_min) && std::isfinite(scan.angle_increment) && scan.angle_increment > 0.0) ||
       !(std::isfinite(scan.range_max) && scan.range_max > 0.0))
@@ -48,7 +48,10 @@ void FreeSpace::build(const core::Scan& scan) {
     const double a = free_radius(scan.ranges[static_cast<std::size_t>(k)], range_max_);
     const double b = free_radius(scan.ranges[static_cast<std::size_t>((k + 1) % n)], range_max_);
     sector_[static_cast<std::size_t>(k)] = std::min(a, b);
-    nearest_ = std::min(nearest_, sector_[static_cast<std::size_t>(k)]);
+    if (sector_[static_cast<std::size_t>(k)] < nearest_) {
+      nearest_ = sector_[static_cast<std::size_t>(k)];
+      nearest_bearing_ = angle_min_ + (k + 0.5) * increment_;
+    }
   }
   if (full_circle_) std::copy_n(sector_.begin(), sectors, sector_.begin() + sectors);
   // Sparse table: level j holds the minimum over 2^j consecutive sectors from each index.
