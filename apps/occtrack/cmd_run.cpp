@@ -24,8 +24,8 @@ constexpr const char* kWho = "occtrack run";
 
 int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
-  planners::make_planner(o.episode.planner, o.episode.planner_settings());  // a bad name fails before measuring
-  // --latency auto is measured here, once, before the episode (Protocol v2).
+  // --latency auto is measured here, once, before the episode (Protocol v2); a bad planner name fails there,
+  // before anything is measured, or just below.
   const sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
   auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings(&settings));
   Progress progress(scenario.name + " (" + planner->name() + ")");

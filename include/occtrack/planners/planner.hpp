@@ -33,7 +33,7 @@ struct PlannerInput {
 
 /// What the safety layer did with a cycle's command (planners/safety.hpp; the metrics count each).
 enum class SafetyAction {
-  off,          ///< no safety layer (--no-shield, or a planner used directly)
+  off,          ///< no safety layer (the default; --shield turns it on), or a planner used directly
   plan,         ///< the planner's own command was certified
   alternative,  ///< a lower-ranked candidate of the planner was the best certified one
   stop,         ///< no candidate was certified; braking to a stop was

@@ -82,11 +82,12 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
     const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
     v += core::velocity_change(v, *u, lag, limit);
     p += v * dt;
-    travelled += v.norm() * dt;
+    const double speed = v.norm();
+    travelled += speed * dt;
     since_check += dt;
     const double now = t + dt;
     const bool braking = now >= hold_end - 1e-12;
-    const bool stopped = braking && v.norm() < 5e-3;
+    const bool stopped = braking && speed < 5e-3;
     const bool watching = !moving_.empty() && now <= settings_.moving_horizon + 1e-12;
     const bool done = stopped && !watching;
     if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !done) continue;

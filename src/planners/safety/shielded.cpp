@@ -98,14 +98,14 @@ class Shielded final : public Planner {
       evasive_left_ = certified.found ? std::max(chosen.hold, interval) : 0.0;
       return send(out, chosen.command, certified.found ? SafetyAction::evasive : SafetyAction::best_effort);
     }
-    // In contact (or closer than nothing can be checked against): head straight away from the nearest return.
+    // 3. In contact (or closer than nothing can be checked against): head straight away from the nearest return.
     const FreeSpace& free = certifier_.free_space();
-    if (free.nearest() > 0.0 && free.nearest() < s.robot_radius + s.margin) {
+    if (free.nearest() > 0.0 && free.nearest() < s.clearance()) {
       const double away = free.nearest_bearing() + M_PI;
       return send(out, s.speed_max * Eigen::Vector2d(std::cos(away), std::sin(away)), SafetyAction::best_effort);
     }
     evasive_left_ = 0.0;
-    remember(out);  // 3. full brake (command zero), uncertified
+    remember(out);  // 4. full brake (command zero), uncertified
   }
 
   /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
