@@ -194,6 +194,7 @@ int run_paper_world(const Options& o) {
 void add_scenario_command(CLI::App& app, int& exit_code) {
   CLI::App* scenario = add_command_group(app, "scenario", "Make scenario files (worlds, target paths, robot start)");
   add_scenario_stats_command(*scenario, exit_code);
+  add_scenario_predict_command(*scenario, exit_code);
   auto [cmd, o] = add_command<Options>(
       *scenario, "generate",
       "Write the benchmark suites (--suite) or one scenario (--kind) from fixed seeds. Seeds 1000-1999 are the "

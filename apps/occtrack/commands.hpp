@@ -13,6 +13,7 @@ void add_bench_paper_command(CLI::App& bench, int& exit_code);  // cmd_bench_pap
 void add_run_command(CLI::App& app, int& exit_code);
 void add_scenario_command(CLI::App& app, int& exit_code);
 void add_scenario_stats_command(CLI::App& scenario, int& exit_code);  // cmd_scenario_stats.cpp
+void add_scenario_predict_command(CLI::App& scenario, int& exit_code);  // cmd_scenario_predict.cpp
 void add_dataset_command(CLI::App& app, int& exit_code);       // cmd_dataset.cpp
 void add_bench_policy_command(CLI::App& bench, int& exit_code);  // cmd_bench_policy.cpp
 #ifdef OCCTRACK_HAVE_LEARNING

@@ -196,6 +196,9 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_flag("--shield", o.planner_options.shield,
                 "Through the safety layer: send only commands certified to leave the robot able to stop in "
                 "space the scan shows free (docs/safety.md)");
+  cmd->add_flag("--predictor", o.planner_options.predictor,
+                "Rank plans against the target predictor (constant velocity mixed with constant turn, near "
+                "future weighted most) instead of a constant-velocity target (docs/target_prediction.md)");
 
   // Protocol v2 (shared/spec/simulation.md, "Protocol v2").
   cmd->add_option("--latency", o.latency,

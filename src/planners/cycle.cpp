@@ -51,7 +51,11 @@ bool hold_unobserved(const PlannerInput& input, PlannerOutput& out, PlanRecord& 
 
 Context::Context(const projection::Settings& projection, const perception::Settings& perception,
                  const RankingSettings& ranking, double response_time)
-    : projection_(projection), ranking_settings_(ranking), perception_(perception), ranking_(ranking, projection) {
+    : projection_(projection),
+      ranking_settings_(ranking),
+      perception_(perception),
+      ranking_(ranking, projection),
+      predictor_(ranking.predictor) {
   const int n = projection.coefficients(), m = projection.steps;
   for (Eigen::VectorXd* v : {&cx_, &cy_, &fit_x_, &fit_y_}) v->resize(n);
   for (Eigen::VectorXd* v : {&x_, &y_}) v->resize(m);
@@ -83,9 +87,22 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
   frame.origin = input.robot_position;
   frame.robot_velocity = input.robot_velocity;
   frame.target << input.target_position - input.robot_position, input.target_velocity;
-  // A hidden target's last estimate, carried forward at constant velocity (the v1 case, age 0, is untouched).
-  if (input.target_age > 0.0)
-    frame.target.head<2>() += input.target_velocity * std::min(input.target_age, kMaxTargetPrediction);
+  const double carried = std::min(input.target_age, kMaxTargetPrediction);
+  if (ranking_settings_.predict_target) {
+    // The estimate's time is input.time - age; a repeated (hidden) estimate is ignored by the predictor.
+    predictor_.observe(input.time - input.target_age, input.target_position, input.target_velocity);
+    Eigen::Vector2d position, velocity;
+    predictor_.state_at(carried, position, velocity);
+    frame.target << position - input.robot_position, velocity;
+    predictor_.predict(carried, basis().times, frame.forecast.positions, forecast_sigma_);
+    frame.forecast.positions.rowwise() -= input.robot_position.transpose();
+    const double d2 = ranking_settings_.forecast_distance * ranking_settings_.forecast_distance;
+    frame.forecast.weights = (1.0 + forecast_sigma_.array().square() / d2).inverse().matrix();
+    frame.forecast.valid = true;
+  } else if (input.target_age > 0.0) {
+    // A hidden target's last estimate, carried forward at constant velocity (the v1 case, age 0, is untouched).
+    frame.target.head<2>() += input.target_velocity * carried;
+  }
   frame.nearest = observation_.nearest;
   frame.cloud = observation_.cloud;
   frame.scan = input.scan;

@@ -99,12 +99,16 @@ class Context {
   Context(const projection::Settings& projection, const perception::Settings& perception,
           const RankingSettings& ranking, double response_time = 0.0);
 
-  /// Forgets perception's tracks (velocity estimates); called when an episode starts.
-  void reset() { perception_.reset(); }
+  /// Forgets perception's tracks (velocity estimates) and the target's history; called when an episode starts.
+  void reset() {
+    perception_.reset();
+    predictor_.reset();
+  }
 
   /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state, a
-  /// negative or NaN target age). A target estimate of age a > 0 (hidden target, Protocol v2) is predicted at
-  /// constant velocity over min(a, kMaxTargetPrediction); the planners plan on that prediction.
+  /// negative or NaN target age). A target estimate of age a > 0 (hidden target, Protocol v2) is predicted
+  /// over min(a, kMaxTargetPrediction), at constant velocity or, with RankingSettings::predict_target, by the
+  /// target predictor, which then also fills frame.forecast; the planners plan on that prediction.
   bool observe(const PlannerInput& input, Frame& frame, std::string* error);
 
   /// The end of a cycle that chose `xi` (robot-centric in record.frame) with ranking `terms`: out's command
@@ -149,6 +153,8 @@ class Context {
   perception::Perception perception_;
   perception::Observation observation_;
   Ranking ranking_;
+  core::TargetPredictor predictor_;
+  Eigen::VectorXd forecast_sigma_;
   Eigen::RowVectorXd command_row_;      // (B(0.1) - B(0)) / 0.1
   Eigen::MatrixXd least_squares_;       // n x m: pseudo-inverse of P
   // Workspaces (fill_row, shift, world_positions), sized at construction.

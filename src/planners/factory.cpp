@@ -24,11 +24,13 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.seed = options.seed;
     s.response_time = options.response_time;
     s.projection.threads = std::max(1, options.threads);
+    s.ranking.predict_target = options.predictor;
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") {
     FollowerSettings s;
     s.response_time = options.response_time;
+    s.ranking.predict_target = options.predictor;
     return std::make_unique<Follower>(s);
   }
   if (name == "autochaser") {
@@ -47,6 +49,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.rank_stop = options.rank_stop;
     s.seed = options.seed;
     s.response_time = options.response_time;
+    s.ranking.predict_target = options.predictor;
     return std::make_unique<LearnedPolicy>(s);
   }
   std::string known;

@@ -48,7 +48,8 @@ void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
   s.record.xi = s.optimizer.result.xi.row(0).cast<double>();
   // The follower does not rank; its record still carries what the ranking makes of its plan.
   const RankingTerms terms =
-      s.context.ranking().evaluate(s.record.xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+      s.context.ranking().evaluate(s.record.xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
+                                  &frame.forecast);
   s.context.finish_plan(out, s.record, clock, s.record.xi, terms);
 }
 

@@ -298,7 +298,8 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
     const Eigen::RowVectorXd& xi = candidate(b);
     if (!xi.allFinite()) continue;
     const RankingTerms terms =
-        s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+        s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
+                                    &frame.forecast);
     s.costs[b] = terms.total;
     if (std::isfinite(s.costs[b]) && (best < 0 || s.costs[b] < s.costs[best])) {
       best = b;

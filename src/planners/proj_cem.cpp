@@ -122,7 +122,8 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
     for (int b = 0; b < B; ++b) {
       s.scored = s.optimizer.result.xi.row(b).cast<double>();
       const RankingTerms terms =
-          s.context.ranking().evaluate(s.scored, frame.target, frame.nearest, frame.occluders_view(), frame.scan);
+          s.context.ranking().evaluate(s.scored, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
+                                       &frame.forecast);
       s.costs[b] = terms.total;
       if (terms.total < best_cost) {
         best_cost = terms.total;

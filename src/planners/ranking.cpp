@@ -29,6 +29,9 @@ bool RankingSettings::validate(std::string* error) const {
   c.finite(band.max, "band.max");
   c.range(band.min, band.reference, "band.min", "band.reference");
   c.range(band.reference, band.max, "band.reference", "band.max");
+  c.positive(forecast_distance, "forecast_distance");
+  std::string predictor_error;
+  c.require(predictor.validate(&predictor_error), "predictor.", predictor_error);
   return c.done(error);
 }
 
@@ -80,7 +83,8 @@ double shadow_depth(const Eigen::MatrixX2d& positions, int last, int stride, con
 
 RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_row, const Eigen::Vector4d& target,
                                const Eigen::Ref<const PointRows>& collision_points,
-                               const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan) const {
+                               const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan,
+                               const TargetForecast* forecast) const {
   const int n = projection_.coefficients(), m = projection_.steps;
   // The same products, in the same kind of buffers, as a fresh evaluation would use (results bit for bit).
   Eigen::VectorXd &cx = cx_, &cy = cy_, &vx = vx_, &vy = vy_, &ax = ax_, &ay = ay_;
@@ -96,19 +100,28 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
   vy.noalias() = basis_.Pd * cy;
   ax.noalias() = basis_.Pdd * cx;
   ay.noalias() = basis_.Pdd * cy;
-  targets.col(0) = target(0) + target(2) * basis_.times.array();
-  targets.col(1) = target(1) + target(3) * basis_.times.array();
+  const bool forecasting = forecast && forecast->valid && forecast->positions.rows() == m &&
+                           forecast->weights.size() == m;
+  if (forecasting) {
+    targets = forecast->positions;
+  } else {
+    targets.col(0) = target(0) + target(2) * basis_.times.array();
+    targets.col(1) = target(1) + target(3) * basis_.times.array();
+  }
 
   RankingTerms terms;
-  terms.occlusion = occlusion::occlusion_cost(positions, targets, basis_.times, occlusion_points, occlusion_weights_,
+  terms.occlusion = occlusion::occlusion_cost(positions, targets, basis_.times, occlusion_points,
+                                              forecasting ? forecast->weights : occlusion_weights_,
                                               settings_.occlusion_stride, settings_.occlusion_margin);
-  double tracking = 0, smoothness = 0, violation = 0;
+  double tracking = 0, smoothness = 0, violation = 0, tracking_weights = 0;
   const double a = projection_.obstacle_radius;
   const Eigen::Index N = collision_points.rows();
   for (int k = 0; k < m; ++k) {
     const double t = basis_.times(k);
     const double distance = (positions.row(k) - targets.row(k)).norm();
-    tracking += (distance - settings_.band.reference) * (distance - settings_.band.reference);
+    const double w = forecasting ? forecast->weights(k) : 1.0;
+    tracking += w * (distance - settings_.band.reference) * (distance - settings_.band.reference);
+    tracking_weights += w;
     smoothness += ax(k) * ax(k) + ay(k) * ay(k);
     // Deepest penetration of an obstacle disk at this step: one square root per step, not per point.
     double nearest2 = INFINITY;
@@ -125,7 +138,7 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
     violation += std::max(0.0, penetration) + (speed2 > vmax * vmax ? std::sqrt(speed2) - vmax : 0.0) +
                  (accel2 > amax * amax ? std::sqrt(accel2) - amax : 0.0);
   }
-  terms.tracking = tracking / m;
+  terms.tracking = tracking_weights > 0.0 ? tracking / tracking_weights : 0.0;
   terms.smoothness = smoothness / m;
   terms.violation = violation / m;
   if (scan && settings_.shadow_weight > 0.0) {

@@ -60,6 +60,8 @@ struct PlannerOutput {
 struct Frame {
   Eigen::Vector2d robot_velocity = Eigen::Vector2d::Zero();
   Eigen::Vector4d target = Eigen::Vector4d::Zero();  ///< x, y, vx, vy
+  /// The predicted target at every step, when the planner's ranking predicts it (RankingSettings::predict_target).
+  TargetForecast forecast;
   PointRows nearest;    ///< the optimizer's obstacles, N x 4 (padded as perception pads)
   /// Every distinct point that can block the view (x, y, vx, vy): the first `occluder_count` rows. The
   /// storage keeps the cloud's size so that a cycle allocates nothing; use occluders_view().
@@ -124,6 +126,8 @@ struct PlannerOptions {
   /// The safety layer (planners/safety.hpp) around the planner. Off by default until issue 11's measurements
   /// are in (docs/safety.md); off reproduces the planners of before it exactly.
   bool shield = false;
+  /// The target predictor in the ranking (RankingSettings::predict_target); off: constant velocity, as before.
+  bool predictor = false;
   double latency = 0.0;          ///< s, command latency the safety layer allows for (Protocol v2)
   double planning_period = 0.05; ///< s between cycles, for the safety layer
   double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer

@@ -9,6 +9,7 @@
 
 #include "occtrack/core/bernstein.hpp"
 #include "occtrack/core/scan.hpp"
+#include "occtrack/core/target_predictor.hpp"
 #include "occtrack/core/tracking.hpp"
 #include "occtrack/projection/settings.hpp"
 
@@ -36,6 +37,14 @@ struct RankingSettings {
   double near_horizon = 1.5;      ///< seconds
   double near_clearance = 0.4;    ///< metres from an obstacle point to the robot centre: the optimizer's disk radius
   core::TrackingBand band;
+  /// The target predictor (core/target_predictor.hpp, issue 11): off ranks against the constant-velocity
+  /// target (the paper's planners, before issue 11). On, the occlusion and tracking terms use the predicted
+  /// target at every step, weighted 1 / (1 + (sigma_k / forecast_distance)^2) for the prediction's spread
+  /// sigma_k, so that the near future, where the prediction is good, counts most (these weights replace
+  /// late_occlusion_weight's taper); a hidden target's estimate is carried forward along the prediction.
+  bool predict_target = false;
+  core::TargetPredictorSettings predictor;
+  double forecast_distance = 1.0;  ///< m, the spread at which a step counts half
 
   /// True when every weight is finite and >= 0, every distance and horizon finite and >= 0 (the margin and
   /// the shadow cap positive), the stride at least 1, late_occlusion_weight in [0, 1] and the band ordered
@@ -51,6 +60,14 @@ struct RankingTerms {
 
 using PointRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
+/// The predicted target at every step of the plan (robot-centric), and each step's weight (see
+/// RankingSettings::predict_target). `valid` false: rank against the linear target instead.
+struct TargetForecast {
+  Eigen::MatrixX2d positions;
+  Eigen::VectorXd weights;
+  bool valid = false;
+};
+
 /// Not safe to share between threads: evaluate() works in buffers sized at construction, so that it
 /// allocates nothing.
 class Ranking {
@@ -61,10 +78,12 @@ class Ranking {
   /// Costs of trajectories given as coefficient rows (x coefficients, then y), robot-centric. target:
   /// (x, y, vx, vy) robot-centric, predicted linearly. collision_points: the optimizer's obstacles (N x 4).
   /// occlusion_points: every point that can block the view (x, y, vx, vy). scan: the cycle's scan, taken
-  /// at the robot-centric origin, for the shadow term (null: no shadow term).
+  /// at the robot-centric origin, for the shadow term (null: no shadow term). forecast: when given and valid
+  /// (one row per step), the occlusion and tracking terms use its positions and weights instead of `target`.
   RankingTerms evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Eigen::Vector4d& target,
                         const Eigen::Ref<const PointRows>& collision_points,
-                        const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan = nullptr) const;
+                        const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan = nullptr,
+                        const TargetForecast* forecast = nullptr) const;
 
   const core::BernsteinBasis& basis() const { return basis_; }
 

@@ -69,7 +69,6 @@ class Shielded final : public Planner {
     if (certifier_.certify(Eigen::Vector2d::Zero())) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
     const double interval = certifier_.hold();
     if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
-      out.ok = true;
       evasive_left_ -= interval;
       return send(out, evasive_, SafetyAction::evasive);
     }
@@ -93,7 +92,6 @@ class Shielded final : public Planner {
         }
     const Choice& chosen = certified.found ? certified : effort;
     if (chosen.found) {
-      out.ok = true;  // the robot has a usable command, whatever the planner managed
       evasive_ = chosen.command;
       evasive_left_ = certified.found ? std::max(chosen.hold, interval) : 0.0;
       return send(out, chosen.command, certified.found ? SafetyAction::evasive : SafetyAction::best_effort);
@@ -125,6 +123,7 @@ class Shielded final : public Planner {
 
   void send(PlannerOutput& out, const Eigen::Vector2d& command, SafetyAction action) {
     if (action != SafetyAction::evasive) evasive_left_ = 0.0;  // a manoeuvre under way ends here
+    out.ok = true;  // the layer's choice is a usable command, whatever the planner managed (else it is zeroed)
     out.command_velocity = command;
     out.safety = action;
     remember(out);
