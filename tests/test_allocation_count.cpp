@@ -330,6 +330,16 @@ TEST(AllocationCount, ShieldedPlannersDoNotAllocateAfterTheFirstCycle) {
   }
 }
 
+TEST(AllocationCount, PredictingPlannersDoNotAllocateAfterTheFirstCycle) {
+  // The target predictor's history, its forecast and the weighted ranking keep to the same rule.
+  for (const char* name : {"follower", "cvae"}) {
+    planners::PlannerOptions options;
+    options.predictor = true;
+    std::unique_ptr<planners::Planner> planner = planners::make_planner(name, options);
+    EXPECT_EQ(planner_allocations(*planner), "") << name;
+  }
+}
+
 TEST(AllocationCount, ProjCemPlanDoesNotAllocateAfterTheFirstCycle) {
   planners::PlannerOptions options;
   options.samples = 48;  // the default's code path (one thread), at a third of the time
