@@ -201,10 +201,12 @@ TEST(Certifier, MovingPointsAndEvasion) {
   double distance = 0.0;
   EXPECT_FALSE(c.certify(Vec2::Zero(), &distance));
   EXPECT_LT(distance, 0.3);
-  // Stepping aside for 1 s at 2 m/s is certified; towards it is not.
-  EXPECT_TRUE(c.certify_held(Vec2(0.0, 2.0), 1.0, &distance));
+  // Stepping aside for 1.5 s at 2 m/s is certified; towards it is not. For 1 s it is not: the robot, lagging,
+  // has made 2 m when it stops, and a point that may turn towards it at 1 m/s could have come as far.
+  EXPECT_TRUE(c.certify_held(Vec2(0.0, 2.0), 1.5, &distance));
   EXPECT_GE(distance, 0.3);
-  EXPECT_FALSE(c.certify_held(Vec2(2.0, 0.0), 1.0));
+  EXPECT_FALSE(c.certify_held(Vec2(2.0, 0.0), 1.5));
+  EXPECT_FALSE(c.certify_held(Vec2(0.0, 2.0), 1.0));
   // A point too fast to get away from (4 m/s from 1.5 m): nothing is certified, but the whole story of each
   // manoeuvre says how close it comes, and stepping aside beats standing still.
   c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.0), Vec2(-4.0, 0.0)}});
@@ -216,11 +218,37 @@ TEST(Certifier, MovingPointsAndEvasion) {
   EXPECT_TRUE(aside.in_free_space);
   EXPECT_NEAR(stand.min_distance, 0.0, 0.05);  // it passes through the robot's centre
   EXPECT_GT(aside.min_distance, stand.min_distance + 0.05);
-  // Receding points do not matter.
+  // Receding points do not matter to a robot standing still.
   c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.0), Vec2(1.0, 0.0)}});
   EXPECT_TRUE(c.certify(Vec2::Zero()));
   // Non-finite commands are never certified.
   EXPECT_FALSE(c.certify(Vec2(std::nan(""), 0.0)));
+}
+
+TEST(Certifier, MovingPointsMayTurnOrReverseWhileTheRobotMoves) {
+  // Passive safety (Settings::moving_may_turn): until the robot has stopped, it keeps clear of a moving point
+  // that turns by up to 90 degrees or reverses; with the constant-velocity prediction alone it need not.
+  const core::Scan open = make_scan([](double) { return kInf; });
+  planners::safety::Settings cv_only = certifier_settings(0.25);
+  cv_only.moving_may_turn = false;
+  Certifier may_turn(certifier_settings(0.25)), straight(cv_only);
+  // Following a point that recedes at 0.7 m/s, 0.9 m ahead, at 1 m/s: fine if it keeps going, not if it reverses.
+  const std::vector<MovingPoint> receding = {{Vec2(0.9, 0.0), Vec2(0.7, 0.0)}};
+  for (Certifier* c : {&may_turn, &straight}) c->begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), receding);
+  EXPECT_TRUE(straight.certify(Vec2(1.0, 0.0)));
+  EXPECT_FALSE(may_turn.certify(Vec2(1.0, 0.0)));
+  // A point crossing 1 m ahead, left to right, at 0.7 m/s, and the robot heading there at 1 m/s: fine if the
+  // point keeps going, not if it turns towards the robot. From rest, backing away is fine either way.
+  const std::vector<MovingPoint> crossing = {{Vec2(1.0, 0.6), Vec2(0.0, -0.7)}};
+  for (Certifier* c : {&may_turn, &straight}) c->begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), crossing);
+  EXPECT_TRUE(straight.certify(Vec2(1.0, 0.0)));
+  EXPECT_FALSE(may_turn.certify(Vec2(1.0, 0.0)));
+  may_turn.begin(open, Vec2::Zero(), Vec2::Zero(), crossing);
+  EXPECT_TRUE(may_turn.certify(Vec2(-0.5, 0.0)));
+  // The speed of the turn is capped by moving_speed_max: an estimate of 5 m/s (a tracking mismatch) does not
+  // make a point 3 m away reachable for a robot that stops within 0.5 m.
+  may_turn.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(3.0, 0.0), Vec2(0.0, 5.0)}});
+  EXPECT_TRUE(may_turn.certify(Vec2(0.5, 0.0)));
 }
 
 TEST(Certifier, RejectsBadSettings) {

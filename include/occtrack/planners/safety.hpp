@@ -39,6 +39,14 @@ struct Settings {
   double step = 0.01;          ///< s, integration step of the certification (the simulator's physics step)
   double check_spacing = 0.02; ///< m the robot may travel between two checks (at most 0.1 s apart)
   double moving_horizon = 2.0; ///< s after the scan through which moving points are followed
+  /// Passive safety against a moving obstacle that stops or reverses (its constant-velocity prediction does not
+  /// see it coming): until the robot has stopped, it must stay clear of everywhere each moving point could be
+  /// along its line of motion, forwards or backwards, at the fastest speed any moving point has shown this
+  /// episode (at least its own). false: constant-velocity prediction only.
+  bool moving_may_turn = true;
+  /// m/s: the fastest a moving obstacle is expected to go. Caps the speed of moving_may_turn (a velocity
+  /// estimate above it is more likely a mismatch of the tracking than an obstacle's speed).
+  double moving_speed_max = 1.0;
   double horizon = 6.0;        ///< s; a manoeuvre that has not stopped by then is not certified
   int evasive_directions = 16; ///< evasive commands: this many directions at speed_max and half of it, each
                                ///< held 0.5, 1 or 1.5 s before braking
@@ -98,8 +106,10 @@ class Certifier {
   void set_robot_radius(double radius) { settings_.robot_radius = radius; }
 
   /// Starts a cycle. `moving` are copied (allocates only when there are more than ever before).
+  /// `moving_speed`: the speed at which a moving point may run along its line of motion either way
+  /// (Settings::moving_may_turn; each point uses the larger of it and its own speed).
   void begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity, const Eigen::Vector2d& previous_command,
-             const std::vector<MovingPoint>& moving);
+             const std::vector<MovingPoint>& moving, double moving_speed = 0.0);
   /// True when `command` is certified (see the class comment). *min_distance, when given, receives the
   /// smallest distance between the robot's centre and a moving point over the manoeuvre (+infinity without).
   bool certify(const Eigen::Vector2d& command, double* min_distance = nullptr) const {
@@ -133,6 +143,7 @@ class Certifier {
   FreeSpace free_;
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
   std::vector<MovingPoint> moving_;
+  std::vector<double> reach_speed_;  // per moving point: the speed of its reachable disk (moving_may_turn)
   double clearance_ = 0.0;
 };
 

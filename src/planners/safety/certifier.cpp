@@ -22,6 +22,7 @@ bool Settings::validate(std::string* error) const {
   c.require(step <= period, "step (", step, ") must not exceed period (", period, ")");
   c.positive(check_spacing, "check_spacing");
   c.non_negative(moving_horizon, "moving_horizon");
+  c.non_negative(moving_speed_max, "moving_speed_max");
   c.positive(horizon, "horizon");
   c.require(horizon / step <= 1e6, "horizon / step (", horizon / step, ") must be at most 1e6 steps");
   c.require(evasive_directions >= 0 && evasive_directions <= 360, "evasive_directions (", evasive_directions,
@@ -31,6 +32,7 @@ bool Settings::validate(std::string* error) const {
 
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
   moving_.reserve(64);  // perception's nearest points (60 by default): no allocation while cycles run
+  reach_speed_.reserve(64);
 }
 
 double Certifier::hold() const {
@@ -41,7 +43,8 @@ double Certifier::hold() const {
 }
 
 void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity,
-                      const Eigen::Vector2d& previous_command, const std::vector<MovingPoint>& moving) {
+                      const Eigen::Vector2d& previous_command, const std::vector<MovingPoint>& moving,
+                      double moving_speed) {
   free_.build(scan);
   velocity_ = robot_velocity.allFinite() ? robot_velocity : Eigen::Vector2d::Zero();
   previous_ = previous_command.allFinite() ? previous_command : Eigen::Vector2d::Zero();
@@ -50,12 +53,16 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   const double reach = fastest * (settings_.latency + hold() + settings_.response_time + fastest / settings_.accel_max) +
                        settings_.clearance() + 0.5;
   moving_.clear();
+  reach_speed_.clear();
+  const double turning = settings_.moving_may_turn && std::isfinite(moving_speed) ? std::max(0.0, moving_speed) : 0.0;
   double nearest_moving = INFINITY;
   for (const MovingPoint& m : moving) {
     if (!m.position.allFinite() || !m.velocity.allFinite()) continue;
     const double distance = m.position.norm();
-    if (distance - m.velocity.norm() * settings_.moving_horizon > reach) continue;
+    const double speed = std::min(settings_.moving_speed_max, std::max(m.velocity.norm(), turning));
+    if (distance - speed * std::max(settings_.moving_horizon, settings_.horizon) > reach) continue;
     moving_.push_back(m);
+    reach_speed_.push_back(settings_.moving_may_turn ? speed : 0.0);
     nearest_moving = std::min(nearest_moving, distance);
   }
   // Already closer than the clearance to something: certify against what the robot has now, so that moving
@@ -100,6 +107,27 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
         if (distance < clearance_) {
           too_near = true;
           if (!to_the_end) return verdict;
+        }
+      }
+    // Passive safety: while the robot moves, clear of wherever a moving point could be had it turned by up to
+    // 90 degrees (a half disk ahead of it) or reversed (a segment behind it) at its reach speed.
+    // (Stopped here once under 5 cm/s: what is left to travel, under 5 cm/s * (tau + step), is negligible
+    // against the reach, which would otherwise keep growing through the lag's exponential tail.)
+    if (!(braking && speed < 0.05))
+      for (std::size_t i = 0; i < moving_.size(); ++i) {
+        const MovingPoint& m = moving_[i];
+        const double speed = m.velocity.norm();
+        if (reach_speed_[i] <= 0.0 || speed <= 0.0) continue;
+        const double r = reach_speed_[i] * now;
+        const Eigen::Vector2d q = p - m.position, ahead = m.velocity / speed;
+        const double a = q.dot(ahead), side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
+        const double distance = a >= 0.0 ? std::max(0.0, q.norm() - r)
+                                         : std::min(std::hypot(a, std::max(0.0, side - r)),   // the half disk
+                                                    std::hypot(std::max(0.0, -a - r), side));  // the segment behind
+        if (distance < clearance_) {
+          too_near = true;
+          if (!to_the_end) return verdict;
+          break;
         }
       }
     // Stopped: what is left to travel is below v * (tau + step), well inside the margin.

@@ -24,6 +24,7 @@ class Shielded final : public Planner {
     perception_.reset();
     has_previous_ = false;
     evasive_left_ = 0.0;
+    fastest_moving_ = 0.0;
   }
   void use_prior(const core::Scenario& scenario) override {
     if (std::isfinite(scenario.robot_radius) && scenario.robot_radius > 0.0)
@@ -53,32 +54,34 @@ class Shielded final : public Planner {
     if (perception_.process(*input.scan, input.robot_position, observation_, nullptr)) {
       const auto& nearest = observation_.nearest;
       for (Eigen::Index i = 0; i < nearest.rows(); ++i)
-        if (nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0)
+        if (nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) {
           moving_.push_back({Eigen::Vector2d(nearest(i, 0), nearest(i, 1)), Eigen::Vector2d(nearest(i, 2), nearest(i, 3))});
+          fastest_moving_ = std::max(fastest_moving_, moving_.back().velocity.norm());
+        }
     }
-    certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_);
+    certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_,
+                     fastest_moving_);
 
     // 1. The planner's command, then its other candidates in rank order.
     if (out.ok && planned.allFinite()) {
       if (certifier_.certify(planned)) return send(out, planned, SafetyAction::plan);
       for (const Vec2& c : out.ranked_commands)
         if (c != planned && certifier_.certify(c)) return send(out, c, SafetyAction::alternative);
+      // The planner's command, slowed: still its way, with less to brake from.
+      for (const double share : {0.75, 0.5, 0.25})
+        if (certifier_.certify(share * planned)) return send(out, share * planned, SafetyAction::alternative);
     }
-    // 2. A stop; else the evasive manoeuvre under way, if still certified; else the evasive manoeuvre that
-    //    keeps farthest from moving points (closest to the planner's wish when nothing moves).
-    if (certifier_.certify(Eigen::Vector2d::Zero())) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
-    const double interval = certifier_.hold();
-    if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
-      evasive_left_ -= interval;
-      return send(out, evasive_, SafetyAction::evasive);
-    }
+    // 2. A certified stop or evasive manoeuvre, whichever is nearer the planner's wish (the stop when equally
+    //    near); else the evasive manoeuvre under way, if still certified; else the best effort: the manoeuvre
+    //    that stays in known-free space and keeps farthest from the moving points' predictions.
     const Settings& s = certifier_.settings();
     const Eigen::Vector2d wish = out.ok && planned.allFinite() ? planned : Eigen::Vector2d::Zero();
-    // One pass over the evasive manoeuvres: the best certified one; and, should none be, the best effort, the
-    // manoeuvre that stays in known-free space and keeps farthest from the moving points' predictions.
-    Choice certified, effort;
+    const double interval = certifier_.hold();
     const Certifier::Verdict still = certifier_.check(Eigen::Vector2d::Zero(), interval, true);
-    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, 0.0, interval);
+    if (still.certified && wish.norm() < 1e-6) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+    Choice certified, effort;  // certified: nearest the wish first; effort: farthest from moving points first
+    if (still.certified) certified.offer(Eigen::Vector2d::Zero(), -wish.norm(), -still.min_distance, interval);
+    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, wish.norm(), interval);
     for (const double hold : {0.5, 1.0, 1.5})
       for (const double share : {1.0, 0.5})
         for (int i = 0; i < s.evasive_directions; ++i) {
@@ -87,15 +90,23 @@ class Shielded final : public Planner {
           const Certifier::Verdict verdict = certifier_.check(c, hold, true);
           if (!verdict.in_free_space) continue;
           const double gap = (c - wish).norm();
-          if (verdict.certified) certified.offer(c, verdict.min_distance, gap, hold);
+          if (verdict.certified) certified.offer(c, -gap, -verdict.min_distance, hold);
           effort.offer(c, verdict.min_distance, gap, hold);
         }
-    const Choice& chosen = certified.found ? certified : effort;
-    if (chosen.found) {
-      evasive_ = chosen.command;
-      evasive_left_ = certified.found ? std::max(chosen.hold, interval) : 0.0;
-      return send(out, chosen.command, certified.found ? SafetyAction::evasive : SafetyAction::best_effort);
+    if (certified.found && certified.command.isZero())
+      return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+    if (certified.found) {
+      evasive_ = certified.command;
+      const double left = std::max(certified.hold, interval);
+      send(out, certified.command, SafetyAction::evasive);
+      evasive_left_ = left;
+      return;
     }
+    if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
+      evasive_left_ -= interval;
+      return send(out, evasive_, SafetyAction::evasive);
+    }
+    if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
     // 3. In contact (or closer than nothing can be checked against): head straight away from the nearest return.
     const FreeSpace& free = certifier_.free_space();
     if (free.nearest() > 0.0 && free.nearest() < s.clearance()) {
@@ -142,6 +153,7 @@ class Shielded final : public Planner {
   bool has_previous_ = false;
   Eigen::Vector2d evasive_ = Eigen::Vector2d::Zero();  // the evasive manoeuvre under way
   double evasive_left_ = 0.0;                           // s it still holds its command
+  double fastest_moving_ = 0.0;  // m/s, the fastest a moving point has been estimated this episode
 
 };
 
