@@ -142,8 +142,14 @@ class Certifier {
   Settings settings_;
   FreeSpace free_;
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
-  std::vector<MovingPoint> moving_;
-  std::vector<double> reach_speed_;  // per moving point: the speed of its reachable disk (moving_may_turn)
+  std::vector<MovingPoint> moving_;  // sorted by velocity: the points of one object together
+  struct Group {                     // the moving points sharing one velocity (one object)
+    std::size_t first = 0, last = 0; // moving_[first, last)
+    Eigen::Vector2d center = Eigen::Vector2d::Zero(), velocity = Eigen::Vector2d::Zero();
+    double radius = 0.0;             // of the circle about center holding every point
+    double reach = 0.0;              // m/s at which they may turn or reverse (0: Settings::moving_may_turn off)
+  };
+  std::vector<Group> groups_;
   double clearance_ = 0.0;
 };
 

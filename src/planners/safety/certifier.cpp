@@ -32,7 +32,7 @@ bool Settings::validate(std::string* error) const {
 
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
   moving_.reserve(64);  // perception's nearest points (60 by default): no allocation while cycles run
-  reach_speed_.reserve(64);
+  groups_.reserve(64);
 }
 
 double Certifier::hold() const {
@@ -53,17 +53,40 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   const double reach = fastest * (settings_.latency + hold() + settings_.response_time + fastest / settings_.accel_max) +
                        settings_.clearance() + 0.5;
   moving_.clear();
-  reach_speed_.clear();
+  groups_.clear();
   const double turning = settings_.moving_may_turn && std::isfinite(moving_speed) ? std::max(0.0, moving_speed) : 0.0;
   double nearest_moving = INFINITY;
   for (const MovingPoint& m : moving) {
     if (!m.position.allFinite() || !m.velocity.allFinite()) continue;
     const double distance = m.position.norm();
     const double speed = std::min(settings_.moving_speed_max, std::max(m.velocity.norm(), turning));
-    if (distance - speed * std::max(settings_.moving_horizon, settings_.horizon) > reach) continue;
+    if (distance - std::max(speed, m.velocity.norm()) * std::max(settings_.moving_horizon, settings_.horizon) > reach)
+      continue;
     moving_.push_back(m);
-    reach_speed_.push_back(settings_.moving_may_turn ? speed : 0.0);
     nearest_moving = std::min(nearest_moving, distance);
+  }
+  // Points of one object share its velocity (perception's clusters): grouped, each group bounded by a circle,
+  // so that check() passes over a group far from the robot at the cost of one distance.
+  std::sort(moving_.begin(), moving_.end(), [](const MovingPoint& a, const MovingPoint& b) {
+    return a.velocity.x() < b.velocity.x() || (a.velocity.x() == b.velocity.x() && a.velocity.y() < b.velocity.y());
+  });
+  for (std::size_t i = 0; i < moving_.size();) {
+    std::size_t end = i + 1;
+    while (end < moving_.size() && moving_[end].velocity == moving_[i].velocity) ++end;
+    Group g;
+    g.first = i;
+    g.last = end;
+    Eigen::Vector2d lo = moving_[i].position, hi = lo;
+    for (std::size_t k = i; k < end; ++k) {
+      lo = lo.cwiseMin(moving_[k].position);
+      hi = hi.cwiseMax(moving_[k].position);
+    }
+    g.center = 0.5 * (lo + hi);
+    for (std::size_t k = i; k < end; ++k) g.radius = std::max(g.radius, (moving_[k].position - g.center).norm());
+    g.velocity = moving_[i].velocity;
+    g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(g.velocity.norm(), turning)) : 0.0;
+    groups_.push_back(g);
+    i = end;
   }
   // Already closer than the clearance to something: certify against what the robot has now, so that moving
   // away is possible and moving closer is not.
@@ -101,31 +124,44 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
     travelled = since_check = 0.0;
     if (!free_.disk_free(p, clearance_)) return verdict;  // leaves known-free space: neither
     if (now <= settings_.moving_horizon + 1e-12)
-      for (const MovingPoint& m : moving_) {
-        const double distance = (p - (m.position + m.velocity * now)).norm();
-        verdict.min_distance = std::min(verdict.min_distance, distance);
-        if (distance < clearance_) {
-          too_near = true;
-          if (!to_the_end) return verdict;
+      for (const Group& g : groups_) {
+        // A lower bound of the group's distance, from its bounding circle: enough when it is clear and no
+        // nearer than what min_distance holds already.
+        const double bound = (p - (g.center + g.velocity * now)).norm() - g.radius;
+        if (bound >= clearance_ && bound >= verdict.min_distance) continue;
+        for (std::size_t i = g.first; i < g.last; ++i) {
+          const double distance = (p - (moving_[i].position + g.velocity * now)).norm();
+          verdict.min_distance = std::min(verdict.min_distance, distance);
+          if (distance < clearance_) too_near = true;
         }
+        if (too_near && !to_the_end) return verdict;
       }
     // Passive safety: while the robot moves, clear of wherever a moving point could be had it turned by up to
-    // 90 degrees (a half disk ahead of it) or reversed (a segment behind it) at its reach speed.
-    // (Stopped here once under 5 cm/s: what is left to travel, under 5 cm/s * (tau + step), is negligible
-    // against the reach, which would otherwise keep growing through the lag's exponential tail.)
-    if (!(braking && speed < 0.05))
-      for (std::size_t i = 0; i < moving_.size(); ++i) {
-        const MovingPoint& m = moving_[i];
-        const double speed = m.velocity.norm();
-        if (reach_speed_[i] <= 0.0 || speed <= 0.0) continue;
-        const double r = reach_speed_[i] * now;
-        const Eigen::Vector2d q = p - m.position, ahead = m.velocity / speed;
-        const double a = q.dot(ahead), side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
-        const double distance = a >= 0.0 ? std::max(0.0, q.norm() - r)
-                                         : std::min(std::hypot(a, std::max(0.0, side - r)),   // the half disk
-                                                    std::hypot(std::max(0.0, -a - r), side));  // the segment behind
-        if (distance < clearance_) {
-          too_near = true;
+    // 90 degrees (a half disk ahead of it) or reversed (a segment behind it) at its reach speed. (Stopped here
+    // once under 5 cm/s: what is left to travel, under 5 cm/s * (tau + step), is negligible against the reach,
+    // which would otherwise keep growing through the lag's exponential tail.)
+    if (!too_near && !(braking && speed < 0.05))
+      for (const Group& g : groups_) {
+        const double r = g.reach * now, speed_of = g.velocity.norm();
+        if (r <= 0.0 || speed_of <= 0.0) continue;
+        if ((p - g.center).norm() - g.radius - r >= clearance_) continue;  // out of the whole disk's reach
+        const Eigen::Vector2d ahead = g.velocity / speed_of;
+        for (std::size_t i = g.first; i < g.last; ++i) {
+          const Eigen::Vector2d q = p - moving_[i].position;
+          const double a = q.dot(ahead), side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
+          double distance;
+          if (a >= 0.0) {
+            distance = q.norm() - r;
+          } else {
+            const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);
+            distance = std::sqrt(std::min(a * a + across * across, behind * behind + side * side));  // half disk, segment
+          }
+          if (distance < clearance_) {
+            too_near = true;
+            break;
+          }
+        }
+        if (too_near) {
           if (!to_the_end) return verdict;
           break;
         }

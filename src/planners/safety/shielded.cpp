@@ -1,5 +1,6 @@
 // The safety layer around a planner (planners/safety.hpp): certify the planner's command, else its lower-ranked
 // candidates, else a stop or an evasive command, else brake in full.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -16,6 +17,7 @@ class Shielded final : public Planner {
       : inner_(std::move(inner)), certifier_(settings), perception_(perception::Settings::tracking()) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
     moving_.reserve(static_cast<std::size_t>(perception::Settings::tracking().nearest_count));
+    candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
   }
 
   std::string name() const override { return inner_->name(); }
@@ -79,32 +81,37 @@ class Shielded final : public Planner {
     const double interval = certifier_.hold();
     const Certifier::Verdict still = certifier_.check(Eigen::Vector2d::Zero(), interval, true);
     if (still.certified && wish.norm() < 1e-6) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
-    Choice certified, effort;  // certified: nearest the wish first; effort: farthest from moving points first
-    if (still.certified) certified.offer(Eigen::Vector2d::Zero(), -wish.norm(), -still.min_distance, interval);
-    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, wish.norm(), interval);
+    // The evasive manoeuvres nearest the wish first (then the shorter hold): the first certified one is the
+    // choice, so that a cycle certifies only as many as it must.
+    candidates_.clear();
     for (const double hold : {0.5, 1.0, 1.5})
       for (const double share : {1.0, 0.5})
         for (int i = 0; i < s.evasive_directions; ++i) {
           const double angle = 2.0 * M_PI * i / s.evasive_directions;
           const Eigen::Vector2d c = share * s.speed_max * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-          const Certifier::Verdict verdict = certifier_.check(c, hold, true);
-          if (!verdict.in_free_space) continue;
-          const double gap = (c - wish).norm();
-          if (verdict.certified) certified.offer(c, -gap, -verdict.min_distance, hold);
-          effort.offer(c, verdict.min_distance, gap, hold);
+          candidates_.push_back({c, hold, (c - wish).norm()});
         }
-    if (certified.found && certified.command.isZero())
-      return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
-    if (certified.found) {
-      evasive_ = certified.command;
-      const double left = std::max(certified.hold, interval);
-      send(out, certified.command, SafetyAction::evasive);
-      evasive_left_ = left;
+    std::sort(candidates_.begin(), candidates_.end(), [](const Candidate& a, const Candidate& b) {
+      return a.gap < b.gap || (a.gap == b.gap && a.hold < b.hold);
+    });
+    for (const Candidate& c : candidates_) {
+      if (still.certified && c.gap >= wish.norm() - 1e-9) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+      if (!certifier_.certify_held(c.command, c.hold)) continue;
+      evasive_ = c.command;
+      send(out, c.command, SafetyAction::evasive);
+      evasive_left_ = std::max(c.hold, interval);
       return;
     }
+    if (still.certified) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
     if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
       evasive_left_ -= interval;
       return send(out, evasive_, SafetyAction::evasive);
+    }
+    Choice effort;  // farthest from the moving points' predictions, then nearest the wish
+    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, wish.norm(), interval);
+    for (const Candidate& c : candidates_) {
+      const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true);
+      if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
     }
     if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
     // 3. In contact (or closer than nothing can be checked against): head straight away from the nearest return.
@@ -116,6 +123,12 @@ class Shielded final : public Planner {
     evasive_left_ = 0.0;
     remember(out);  // 4. full brake (command zero), uncertified
   }
+
+  struct Candidate {
+    Eigen::Vector2d command;
+    double hold, gap;  // s held before braking; distance from the planner's wish
+  };
+  std::vector<Candidate> candidates_;  // the evasive manoeuvres, storage kept from cycle to cycle
 
   /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
   struct Choice {
