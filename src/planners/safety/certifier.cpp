@@ -143,14 +143,15 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
     if (!too_near && !(braking && speed < 0.05))
       for (const Group& g : groups_) {
         const double r = g.reach * now, speed_of = g.velocity.norm();
-        if (r <= 0.0 || speed_of <= 0.0) continue;
+        if (r <= 0.0) continue;
         if ((p - g.center).norm() - g.radius - r >= clearance_) continue;  // out of the whole disk's reach
-        const Eigen::Vector2d ahead = g.velocity / speed_of;
+        // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
+        const Eigen::Vector2d ahead = speed_of > 0.0 ? Eigen::Vector2d(g.velocity / speed_of) : Eigen::Vector2d::Zero();
         for (std::size_t i = g.first; i < g.last; ++i) {
           const Eigen::Vector2d q = p - moving_[i].position;
           const double a = q.dot(ahead), side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
           double distance;
-          if (a >= 0.0) {
+          if (a >= 0.0 || speed_of <= 0.0) {
             distance = q.norm() - r;
           } else {
             const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);

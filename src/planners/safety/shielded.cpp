@@ -18,6 +18,7 @@ class Shielded final : public Planner {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
     moving_.reserve(static_cast<std::size_t>(perception::Settings::tracking().nearest_count));
     candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
+    memory_.reserve(kMemoryCapacity);
   }
 
   std::string name() const override { return inner_->name(); }
@@ -27,6 +28,7 @@ class Shielded final : public Planner {
     has_previous_ = false;
     evasive_left_ = 0.0;
     fastest_moving_ = 0.0;
+    memory_.clear();
   }
   void use_prior(const core::Scenario& scenario) override {
     if (std::isfinite(scenario.robot_radius) && scenario.robot_radius > 0.0)
@@ -55,11 +57,23 @@ class Shielded final : public Planner {
     moving_.clear();
     if (perception_.process(*input.scan, input.robot_position, observation_, nullptr)) {
       const auto& nearest = observation_.nearest;
-      for (Eigen::Index i = 0; i < nearest.rows(); ++i)
-        if (nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) {
-          moving_.push_back({Eigen::Vector2d(nearest(i, 0), nearest(i, 1)), Eigen::Vector2d(nearest(i, 2), nearest(i, 3))});
-          fastest_moving_ = std::max(fastest_moving_, moving_.back().velocity.norm());
-        }
+      forget_before(input.time - kMovingMemory);
+      const std::size_t fresh = memory_.size();  // this cycle's objects go after the remembered ones
+      for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
+        const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1)), velocity(nearest(i, 2), nearest(i, 3));
+        if (!position.allFinite() || !velocity.allFinite() || velocity.isZero()) continue;
+        moving_.push_back({position, velocity});
+        fastest_moving_ = std::max(fastest_moving_, velocity.norm());
+        memorize(fresh, input.robot_position + position, velocity, input.time);
+      }
+      for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
+        const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
+        if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
+        // Reported still, but where something moved within the last 0.5 s: an obstacle reversing passes
+        // through zero speed, and its estimate lags. Moving with unknown heading (Certifier: a full disk).
+        if (moved_lately(input.robot_position + position, input.time, fresh))
+          moving_.push_back({position, Eigen::Vector2d::Zero()});
+      }
     }
     certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_,
                      fastest_moving_);
@@ -152,6 +166,34 @@ class Shielded final : public Planner {
     out.safety = action;
     remember(out);
   }
+  /// Adds a moving point (world position) to this cycle's object of its velocity in memory_[fresh, end).
+  void memorize(std::size_t fresh, const Eigen::Vector2d& world, const Eigen::Vector2d& velocity, double time) {
+    for (std::size_t k = fresh; k < memory_.size(); ++k)
+      if (memory_[k].velocity == velocity) {
+        memory_[k].lo = memory_[k].lo.cwiseMin(world);
+        memory_[k].hi = memory_[k].hi.cwiseMax(world);
+        return;
+      }
+    if (memory_.size() < kMemoryCapacity) memory_.push_back({world, world, velocity, time});
+  }
+  void forget_before(double time) {
+    std::size_t kept = 0;
+    for (const Seen& m : memory_)
+      if (m.time >= time) memory_[kept++] = m;
+    memory_.resize(kept);
+  }
+  /// True when a moving object was seen near `world` lately (before this cycle's, memory_[0, fresh)): within
+  /// 0.2 m of the box of its points plus what it could have moved since.
+  bool moved_lately(const Eigen::Vector2d& world, double time, std::size_t fresh) const {
+    for (std::size_t k = 0; k < fresh; ++k) {
+      const Seen& m = memory_[k];
+      const double reach = 0.2 + m.velocity.norm() * std::max(0.0, time - m.time);
+      const Eigen::Vector2d outside = (m.lo - world).cwiseMax(world - m.hi).cwiseMax(0.0);
+      if (outside.squaredNorm() < reach * reach) return true;
+    }
+    return false;
+  }
+
   void remember(const PlannerOutput& out) {
     previous_ = out.command_velocity;
     has_previous_ = true;
@@ -167,6 +209,13 @@ class Shielded final : public Planner {
   Eigen::Vector2d evasive_ = Eigen::Vector2d::Zero();  // the evasive manoeuvre under way
   double evasive_left_ = 0.0;                           // s it still holds its command
   double fastest_moving_ = 0.0;  // m/s, the fastest a moving point has been estimated this episode
+  struct Seen {  // a moving object seen lately: the bounding box of its points (world), its velocity, when
+    Eigen::Vector2d lo, hi, velocity;
+    double time = 0.0;
+  };
+  std::vector<Seen> memory_;
+  static constexpr double kMovingMemory = 0.5;      // s
+  static constexpr std::size_t kMemoryCapacity = 512;  // objects over the last second
 
 };
 
