@@ -345,6 +345,35 @@ TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   EXPECT_GT(safe.metrics.shield.evasive, 0);
 }
 
+TEST(ShieldEpisode, KeepsOffAnObstacleThatMayReverse) {
+  // A 0.6 m box slides away along a 3 m lane at 0.7 m/s and comes back; a careless planner follows it at its
+  // speed. Followed at constant velocity it looks safe until it reverses at the lane's end, 0.65 m ahead, and
+  // then nothing the lagging robot can do avoids it: the shield must not have followed so closely.
+  core::Scenario s;
+  s.name = "reversing";
+  s.duration = 12.0;
+  core::ObstacleSpec slider = box(Vec2(1.2, 0.0), Vec2(0.6, 0.6));
+  slider.path = {Vec2(1.2, 0.0), Vec2(4.2, 0.0)};
+  slider.speed = 0.7;
+  s.obstacles = {slider};
+  s.target = {{0.0, Vec2(0.0, 1.5)}};
+  s.sensor.beams = 360;
+  Constant follower(Vec2(0.7, 0.0));
+  const auto bare = sim::run_episode(s, follower, lagged_episode());
+  EXPECT_GT(bare.metrics.collisions, 0);
+  auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(Vec2(0.7, 0.0)), episode_shield());
+  const auto safe = sim::run_episode(s, *shielded, lagged_episode());
+  EXPECT_EQ(safe.metrics.collisions, 0);
+  EXPECT_GT(safe.metrics.min_clearance_m, 0.0);
+  EXPECT_GT(safe.metrics.shield.plan, 0);  // it did follow, at a distance
+  // The constant-velocity prediction alone is not enough here.
+  planners::safety::Settings straight = episode_shield();
+  straight.moving_may_turn = false;
+  auto naive = planners::safety::make_shielded(std::make_unique<Constant>(Vec2(0.7, 0.0)), straight);
+  const auto caught = sim::run_episode(s, *naive, lagged_episode());
+  EXPECT_GT(caught.metrics.collisions, 0);
+}
+
 TEST(ShieldEpisode, NeverSendsANonFiniteCommandOnBadScans) {
   class Nan final : public planners::Planner {
    public:
