@@ -124,12 +124,13 @@ bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, 
     double gap = 0.0;
     if (w > 1.0) gap = std::isfinite(period) ? std::min(w - 1.0, period - w) : w - 1.0;
     if (w < 0.0) gap = -w;
-    const double delta = gap * increment_;
-    if (d > clearance && delta > std::asin(clearance / d)) continue;  // the disk does not reach into it
     long index = k % sectors;
     if (index < 0) index += sectors;
-    if (sector_[static_cast<std::size_t>(index)] < far_intersection(d, clearance, std::min(delta, M_PI)))
-      return false;
+    const double radius = sector_[static_cast<std::size_t>(index)];
+    if (radius >= d + clearance) continue;  // beyond the disk's farthest point: no need for the angle
+    const double delta = gap * increment_;
+    if (d > clearance && delta * d > clearance && delta > std::asin(clearance / d)) continue;  // not reached
+    if (radius < far_intersection(d, clearance, std::min(delta, M_PI))) return false;
   }
   return true;
 }
