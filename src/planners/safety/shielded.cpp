@@ -124,7 +124,6 @@ class Shielded final : public Planner {
     Choice effort;  // farthest from the moving points' predictions, then nearest the wish
     if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, wish.norm(), interval);
     for (const Candidate& c : candidates_) {
-      if (c.hold > kBestEffortHold) continue;  // the shortest commitments only: this runs every manoeuvre to its end
       const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true);
       if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
     }
@@ -144,7 +143,6 @@ class Shielded final : public Planner {
     double hold, gap;  // s held before braking; distance from the planner's wish
   };
   std::vector<Candidate> candidates_;  // the evasive manoeuvres, storage kept from cycle to cycle
-  static constexpr double kBestEffortHold = 0.5;  // s: the longest hold the best effort considers
 
   /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
   struct Choice {
