@@ -107,9 +107,7 @@ int run_predict(const PredictOptions& o) {
   if (!(o.period > 0.0) || !std::isfinite(o.period))
     throw std::invalid_argument("--period must be a positive number of seconds");
   namespace fs = std::filesystem;
-  if (!fs::exists(o.path)) throw std::invalid_argument(o.path + ": no such file or folder");
-  const std::vector<fs::path> files = fs::is_directory(o.path) ? app::scenario_files(o.path)
-                                                               : std::vector<fs::path>{fs::path(o.path)};
+  const std::vector<fs::path> files = app::file_or_scenario_files(o.path);
   if (!o.json) {
     std::printf("mean error (m) of constant velocity, of the predictor, and the change, at each horizon\n");
     std::printf("%-32s", "file");

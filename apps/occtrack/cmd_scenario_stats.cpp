@@ -28,14 +28,6 @@ struct StatsOptions {
   bool json = false;
 };
 
-// FILE itself, or the scenario files of DIR (app::scenario_files).
-std::vector<std::filesystem::path> stats_files(const std::string& path) {
-  namespace fs = std::filesystem;
-  if (!fs::exists(path)) throw std::invalid_argument(path + ": no such file or folder");
-  if (!fs::is_directory(path)) return {fs::path(path)};
-  return app::scenario_files(path);
-}
-
 nlohmann::json stats_json(const std::string& name, const sim::PathStats& s) {
   return {{"file", name},
           {"duration_s", s.duration},
@@ -55,7 +47,7 @@ void print_row(const std::string& name, const sim::PathStats& s) {
 }
 
 int run_stats(const StatsOptions& o) {
-  const std::vector<std::filesystem::path> files = stats_files(o.path);
+  const std::vector<std::filesystem::path> files = app::file_or_scenario_files(o.path);
   sim::PathSamples all;
   nlohmann::json rows = nlohmann::json::array();
   if (!o.json)

@@ -36,6 +36,12 @@ std::vector<fs::path> scenario_files(const fs::path& folder) {
   return files;
 }
 
+std::vector<fs::path> file_or_scenario_files(const std::string& path) {
+  if (!fs::exists(path)) throw std::invalid_argument(path + ": no such file or folder");
+  if (!fs::is_directory(path)) return {fs::path(path)};
+  return scenario_files(path);
+}
+
 Suite load_suite(const std::string& suite, int episodes) {
   const fs::path folder = suite_folder(suite);
   std::vector<fs::path> files = scenario_files(folder);

@@ -15,6 +15,9 @@ namespace occtrack::app {
 /// The scenario files (*.yaml, *.yml) directly in `folder`, sorted by name: the one rule for which files a
 /// folder of scenarios holds (`bench suite`, `bench paper`, `scenario stats`). Throws when there are none.
 std::vector<std::filesystem::path> scenario_files(const std::filesystem::path& folder);
+/// `path` itself when it is a file, else scenario_files(path) (`scenario stats`, `scenario predict`).
+/// Throws std::invalid_argument when it does not exist.
+std::vector<std::filesystem::path> file_or_scenario_files(const std::string& path);
 
 /// A suite's scenarios, sorted by file name, and the suite's name (its folder's).
 struct Suite {
