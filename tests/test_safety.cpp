@@ -421,3 +421,116 @@ TEST(ShieldEpisode, FactoryPlannersStopShortOfTheGap) {
 
 }  // namespace
 }  // namespace occtrack
+
+namespace occtrack {
+namespace {
+
+using planners::safety::MotionEvidence;
+
+/// The returns of `scan` (taken at `at`) that hit the box of full extent `size` about `center`, robot-centric,
+/// as the moving points perception would report for it.
+std::vector<MovingPoint> object_points(const core::Scan& scan, const Vec2& at, const Vec2& center,
+                                       const Vec2& size) {
+  std::vector<MovingPoint> points;
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
+    const double r = scan.ranges[i], a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    if (!std::isfinite(r) || r > scan.range_max) continue;
+    const Vec2 p = r * Vec2(std::cos(a), std::sin(a));
+    const Vec2 off = (at + p - center).cwiseAbs() - 0.5 * size;
+    if (off.maxCoeff() < 0.02) points.push_back({p, Vec2(0.3, 0.0)});
+  }
+  return points;
+}
+
+/// Feeds `evidence` 0.7 s of scans, 0.05 s apart, of the obstacles `world_at(t)` seen from `robot_at(t)`, and
+/// returns the last scan.
+template <typename WorldAt, typename RobotAt>
+core::Scan feed(MotionEvidence& evidence, WorldAt world_at, RobotAt robot_at) {
+  core::Scan scan;
+  for (int k = 0; k <= 14; ++k) {
+    const double t = 0.05 * k;
+    scan = world_scan(world_at(t), robot_at(t));
+    evidence.add(scan, robot_at(t), t);
+  }
+  return scan;
+}
+
+TEST(MotionEvidence, StaticObjectsSeenFromAMovingRobotAreStill) {
+  MotionEvidence evidence;
+  const auto world = [](double) {
+    return std::vector<core::ObstacleSpec>{box(Vec2(3.0, 1.5), Vec2(0.6, 0.6)), box(Vec2(2.0, -2.0), Vec2(3.0, 0.3))};
+  };
+  const auto robot = [](double t) { return Vec2(1.5 * t, 0.2 * t); };  // 1.5 m/s
+  const core::Scan scan = feed(evidence, world, robot);
+  const auto cube = object_points(scan, robot(0.7), Vec2(3.0, 1.5), Vec2(0.6, 0.6));
+  const auto wall = object_points(scan, robot(0.7), Vec2(2.0, -2.0), Vec2(3.0, 0.3));
+  ASSERT_GT(cube.size(), 5u);
+  ASSERT_GT(wall.size(), 20u);
+  EXPECT_EQ(evidence.judge(cube.data(), cube.size()), MotionEvidence::Verdict::still);
+  EXPECT_EQ(evidence.judge(wall.data(), wall.size()), MotionEvidence::Verdict::still);
+}
+
+TEST(MotionEvidence, AnApproachingObjectMoved) {
+  MotionEvidence evidence;
+  const auto centre = [](double t) { return Vec2(3.0 - 0.5 * t, 0.5); };  // 0.5 m/s towards the robot
+  const auto world = [&](double t) { return std::vector<core::ObstacleSpec>{box(centre(t), Vec2(0.6, 0.6))}; };
+  const auto robot = [](double) { return Vec2(0.0, 0.0); };
+  const core::Scan scan = feed(evidence, world, robot);
+  const auto cube = object_points(scan, robot(0.7), centre(0.7), Vec2(0.6, 0.6));
+  ASSERT_GT(cube.size(), 5u);
+  EXPECT_EQ(evidence.judge(cube.data(), cube.size()), MotionEvidence::Verdict::moved);
+}
+
+TEST(MotionEvidence, AWallSlidingAlongItsLengthMovedAndOneLeavingMovedToo) {
+  // From the side its surface stays where it was; its leading end comes into space seen free.
+  const auto robot = [](double) { return Vec2(0.0, 0.0); };
+  {
+    MotionEvidence evidence;
+    const auto centre = [](double t) { return Vec2(-1.0 + 0.7 * t, 1.5); };
+    const auto world = [&](double t) { return std::vector<core::ObstacleSpec>{box(centre(t), Vec2(3.0, 0.2))}; };
+    const core::Scan scan = feed(evidence, world, robot);
+    auto wall = object_points(scan, robot(0.7), centre(0.7), Vec2(3.0, 0.2));
+    ASSERT_GT(wall.size(), 20u);
+    EXPECT_EQ(evidence.judge(wall.data(), wall.size()), MotionEvidence::Verdict::moved);
+  }
+  {
+    // Its trailing end leaves space this scan sees free. Only the points of its trailing half are reported:
+    // they all lie where the earlier scans saw the wall, so only what the wall left shows the motion.
+    MotionEvidence evidence;
+    const auto centre = [](double t) { return Vec2(1.0 + 0.7 * t, 1.5); };
+    const auto world = [&](double t) { return std::vector<core::ObstacleSpec>{box(centre(t), Vec2(3.0, 0.2))}; };
+    const core::Scan scan = feed(evidence, world, robot);
+    auto wall = object_points(scan, robot(0.7), centre(0.7), Vec2(3.0, 0.2));
+    std::erase_if(wall, [](const MovingPoint& p) { return p.position.x() > 1.5; });
+    ASSERT_GT(wall.size(), 5u);
+    EXPECT_EQ(evidence.judge(wall.data(), wall.size()), MotionEvidence::Verdict::moved);
+  }
+}
+
+TEST(MotionEvidence, WhatWasOutOfSightOrTooRecentIsUnknown) {
+  const auto robot = [](double) { return Vec2(0.0, 0.0); };
+  // Hidden behind a nearer box until the last scan: nothing to compare with.
+  MotionEvidence evidence;
+  const auto world = [](double t) {
+    std::vector<core::ObstacleSpec> o{box(Vec2(3.0, 0.0), Vec2(0.4, 0.4))};
+    if (t < 0.69) o.push_back(box(Vec2(1.0, 0.0), Vec2(0.2, 1.2)));
+    return o;
+  };
+  const core::Scan scan = feed(evidence, world, robot);
+  const auto cube = object_points(scan, robot(0.7), Vec2(3.0, 0.0), Vec2(0.4, 0.4));
+  ASSERT_GT(cube.size(), 3u);
+  EXPECT_EQ(evidence.judge(cube.data(), cube.size()), MotionEvidence::Verdict::unknown);
+  // One scan only, or none.
+  MotionEvidence fresh;
+  EXPECT_EQ(fresh.judge(cube.data(), cube.size()), MotionEvidence::Verdict::unknown);
+  fresh.add(scan, Vec2::Zero(), 0.0);
+  EXPECT_EQ(fresh.judge(cube.data(), cube.size()), MotionEvidence::Verdict::unknown);
+  EXPECT_EQ(fresh.judge(cube.data(), 0), MotionEvidence::Verdict::unknown);
+  // A reset forgets the history.
+  evidence.reset();
+  evidence.add(scan, Vec2::Zero(), 0.7);
+  EXPECT_EQ(evidence.judge(cube.data(), cube.size()), MotionEvidence::Verdict::unknown);
+}
+
+}  // namespace
+}  // namespace occtrack

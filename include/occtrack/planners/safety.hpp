@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,10 @@ struct Settings {
   /// m/s: the fastest a moving obstacle is expected to go. Caps the speed of moving_may_turn (a velocity
   /// estimate above it is more likely a mismatch of the tracking than an obstacle's speed).
   double moving_speed_max = 1.0;
+  /// Judge each object perception reports moving against earlier scans (MotionEvidence): one the LiDAR shows
+  /// still is treated as static, unless an object the LiDAR showed moving was near it in the last 0.5 s.
+  /// false: every velocity estimate is believed.
+  bool motion_evidence = true;
   double horizon = 6.0;        ///< s; a manoeuvre that has not stopped by then is not certified
   int evasive_directions = 16; ///< evasive commands: this many directions at speed_max and half of it, each
                                ///< held 0.5, 1 or 1.5 s before braking
@@ -151,6 +156,53 @@ class Certifier {
   };
   std::vector<Group> groups_;
   double clearance_ = 0.0;
+};
+
+/// Whether an object moved, from the LiDAR alone (docs/safety.md, "Motion evidence"). Perception's velocity
+/// estimates follow cluster centroids, which drift as the view of a static object changes, so static objects
+/// are often reported moving. Scans taken from known robot positions tell more. Against each of two earlier
+/// scans (the newest at least `baselines` seconds old):
+/// - moved: a point of the object lies where the earlier scan showed free space (something came), or a return
+///   of the earlier scan near the object lies where this scan shows free space (something left);
+/// - still: neither, at both baselines, and at each at least half of the object's points lie on a surface
+///   the earlier scan saw (within the tolerance);
+/// - unknown: otherwise (the object was out of the earlier scan's sight, or no scan is old enough).
+/// The tolerance (m) sets the slowest motion told from noise: tolerance / baseline m/s.
+class MotionEvidence {
+ public:
+  enum class Verdict { moved, still, unknown };
+  struct Options {
+    double tolerance = 0.08;          ///< m
+    double baselines[2] = {0.25, 0.5};  ///< s
+    double reach = 1.0;               ///< m/s: how far an earlier return may lie from the object it belongs to
+  };
+  MotionEvidence() : MotionEvidence(Options{}) {}
+  explicit MotionEvidence(const Options& options);
+  /// Forgets every scan (a new episode).
+  void reset();
+  /// This cycle's scan, taken at world position `robot` at `time`. Keeps a history thinned to one scan per
+  /// 0.1 s over the last 1.2 s (allocates only for a scan with more beams than any before).
+  void add(const core::Scan& scan, const Eigen::Vector2d& robot, double time);
+  /// The verdict on an object given by its points (robot-centric, in the scan of the last add()).
+  Verdict judge(const MovingPoint* points, std::size_t count) const;
+
+ private:
+  struct Frame {
+    FreeSpace free;
+    std::vector<Eigen::Vector2d> returns;  // world position per beam, NaN without a return
+    double angle_min = 0.0, increment = 0.0;
+    bool full_circle = false;
+    Eigen::Vector2d robot = Eigen::Vector2d::Zero();
+    double time = -INFINITY;
+  };
+  void fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time);
+  bool on_surface(const Frame& frame, const Eigen::Vector2d& world) const;
+  const Frame* older_than(double age) const;
+
+  Options options_;
+  Frame current_;
+  std::vector<Frame> history_;  // ring, oldest overwritten; time -infinity: an empty slot
+  std::size_t next_ = 0;
 };
 
 /// Wraps `inner` with the safety layer. The wrapper keeps the inner planner's name; its use_prior() takes the

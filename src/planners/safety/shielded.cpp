@@ -29,6 +29,7 @@ class Shielded final : public Planner {
     evasive_left_ = 0.0;
     fastest_moving_ = 0.0;
     memory_.clear();
+    evidence_.reset();
   }
   void use_prior(const core::Scenario& scenario) override {
     if (std::isfinite(scenario.robot_radius) && scenario.robot_radius > 0.0)
@@ -55,6 +56,7 @@ class Shielded final : public Planner {
       return;  // nothing to certify against: full brake
     }
     moving_.clear();
+    if (certifier_.settings().motion_evidence) evidence_.add(*input.scan, input.robot_position, input.time);
     if (perception_.process(*input.scan, input.robot_position, observation_, nullptr)) {
       const auto& nearest = observation_.nearest;
       forget_before(input.time - kMovingMemory);
@@ -63,9 +65,31 @@ class Shielded final : public Planner {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1)), velocity(nearest(i, 2), nearest(i, 3));
         if (!position.allFinite() || !velocity.allFinite() || velocity.isZero()) continue;
         moving_.push_back({position, velocity});
-        fastest_moving_ = std::max(fastest_moving_, velocity.norm());
-        memorize(fresh, input.robot_position + position, velocity, input.time);
       }
+      // One object per velocity (perception gives every point of a cluster its cluster's velocity). The
+      // LiDAR's own evidence may show it still: then it is a static obstacle, unless an object shown moving
+      // was near it lately (a reversing wall stands still for an instant).
+      std::sort(moving_.begin(), moving_.end(), [](const MovingPoint& a, const MovingPoint& b) {
+        return a.velocity.x() < b.velocity.x() || (a.velocity.x() == b.velocity.x() && a.velocity.y() < b.velocity.y());
+      });
+      std::size_t kept = 0;
+      for (std::size_t first = 0, last = 0; first < moving_.size(); first = last) {
+        while (last < moving_.size() && moving_[last].velocity == moving_[first].velocity) ++last;
+        const MotionEvidence::Verdict verdict = certifier_.settings().motion_evidence
+                                                    ? evidence_.judge(&moving_[first], last - first)
+                                                    : MotionEvidence::Verdict::unknown;
+        if (verdict == MotionEvidence::Verdict::still &&
+            !shown_moving_lately(input.robot_position, &moving_[first], last - first, input.time, fresh))
+          continue;
+        const Eigen::Vector2d velocity = moving_[first].velocity;
+        fastest_moving_ = std::max(fastest_moving_, velocity.norm());
+        for (std::size_t i = first; i < last; ++i) {
+          memorize(fresh, input.robot_position + moving_[i].position, velocity, input.time,
+                   verdict == MotionEvidence::Verdict::moved);
+          moving_[kept++] = moving_[i];
+        }
+      }
+      moving_.resize(kept);
       for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
@@ -167,14 +191,16 @@ class Shielded final : public Planner {
     remember(out);
   }
   /// Adds a moving point (world position) to this cycle's object of its velocity in memory_[fresh, end).
-  void memorize(std::size_t fresh, const Eigen::Vector2d& world, const Eigen::Vector2d& velocity, double time) {
+  /// `shown`: the LiDAR's own evidence showed it moving (MotionEvidence).
+  void memorize(std::size_t fresh, const Eigen::Vector2d& world, const Eigen::Vector2d& velocity, double time,
+                bool shown) {
     for (std::size_t k = fresh; k < memory_.size(); ++k)
       if (memory_[k].velocity == velocity) {
         memory_[k].lo = memory_[k].lo.cwiseMin(world);
         memory_[k].hi = memory_[k].hi.cwiseMax(world);
         return;
       }
-    if (memory_.size() < kMemoryCapacity) memory_.push_back({world, world, velocity, time});
+    if (memory_.size() < kMemoryCapacity) memory_.push_back({world, world, velocity, time, shown});
   }
   void forget_before(double time) {
     std::size_t kept = 0;
@@ -194,6 +220,23 @@ class Shielded final : public Planner {
     return false;
   }
 
+  /// True when an object the LiDAR showed moving in the last 0.5 s (before this cycle, memory_[0, fresh)) was
+  /// within 0.2 m, plus what it could have moved since, of one of `points` (robot-centric).
+  bool shown_moving_lately(const Eigen::Vector2d& robot, const MovingPoint* points, std::size_t count, double time,
+                           std::size_t fresh) const {
+    for (std::size_t k = 0; k < fresh; ++k) {
+      const Seen& m = memory_[k];
+      if (!m.shown) continue;
+      const double reach = 0.2 + m.velocity.norm() * std::max(0.0, time - m.time);
+      for (std::size_t i = 0; i < count; ++i) {
+        const Eigen::Vector2d world = robot + points[i].position;
+        const Eigen::Vector2d outside = (m.lo - world).cwiseMax(world - m.hi).cwiseMax(0.0);
+        if (outside.squaredNorm() < reach * reach) return true;
+      }
+    }
+    return false;
+  }
+
   void remember(const PlannerOutput& out) {
     previous_ = out.command_velocity;
     has_previous_ = true;
@@ -203,6 +246,7 @@ class Shielded final : public Planner {
   Certifier certifier_;
   perception::Perception perception_;
   perception::Observation observation_;
+  MotionEvidence evidence_;
   std::vector<MovingPoint> moving_;
   Eigen::Vector2d previous_ = Eigen::Vector2d::Zero();
   bool has_previous_ = false;
@@ -212,6 +256,7 @@ class Shielded final : public Planner {
   struct Seen {  // a moving object seen lately: the bounding box of its points (world), its velocity, when
     Eigen::Vector2d lo, hi, velocity;
     double time = 0.0;
+    bool shown = false;  // the LiDAR's own evidence showed it moving
   };
   std::vector<Seen> memory_;
   static constexpr double kMovingMemory = 0.5;      // s

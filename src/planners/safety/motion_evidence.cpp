@@ -1,0 +1,137 @@
+// Whether an object moved, from the LiDAR alone (planners/safety.hpp, MotionEvidence; docs/safety.md).
+#include <algorithm>
+#include <cmath>
+
+#include "occtrack/planners/safety.hpp"
+
+namespace occtrack::planners::safety {
+
+namespace {
+
+constexpr std::size_t kHistory = 12;   // scans kept, one per kSpacing: the last 1.2 s
+constexpr double kSpacing = 0.1;       // s between kept scans
+constexpr double kSameSurface = 0.6;   // m: two adjacent returns closer than this are joined into a surface
+
+double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double length2 = ab.squaredNorm();
+  const double t = length2 > 0.0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+}  // namespace
+
+MotionEvidence::MotionEvidence(const Options& options) : options_(options), history_(kHistory) {}
+
+void MotionEvidence::reset() {
+  for (Frame& f : history_) f.time = -INFINITY;  // storage kept for the next episode
+  next_ = 0;
+  current_.time = -INFINITY;
+}
+
+void MotionEvidence::fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time) {
+  frame.free.build(scan);
+  frame.angle_min = scan.angle_min;
+  frame.increment = scan.angle_increment;
+  const std::size_t n = scan.ranges.size();
+  frame.full_circle = std::abs(static_cast<double>(n) * scan.angle_increment - 2.0 * M_PI) <= 1e-6 * 2.0 * M_PI;
+  frame.robot = robot;
+  frame.time = time;
+  frame.returns.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = scan.ranges[i], a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    frame.returns[i] = r > 0.0 && r <= scan.range_max && std::isfinite(r) && std::isfinite(a)
+                           ? Eigen::Vector2d(robot + r * Eigen::Vector2d(std::cos(a), std::sin(a)))
+                           : Eigen::Vector2d::Constant(NAN);
+  }
+}
+
+void MotionEvidence::add(const core::Scan& scan, const Eigen::Vector2d& robot, double time) {
+  if (!(time >= current_.time)) reset();  // time ran backwards: another episode
+  fill(current_, scan, robot, time);
+  if (!robot.allFinite() || !std::isfinite(time)) {
+    current_.time = -INFINITY;  // nothing to judge against
+    return;
+  }
+  // Every slot gets its storage at once (the first scan, or one with more beams than any before), so that the
+  // history fills without allocating cycle after cycle.
+  if (history_.front().returns.capacity() < current_.returns.size())
+    for (Frame& f : history_) {
+      const double kept = f.time;
+      f = current_;
+      f.time = kept;
+    }
+  // Keep it when the newest kept scan is kSpacing old (a little less, for cycle jitter).
+  const Frame& newest = history_[(next_ + kHistory - 1) % kHistory];
+  if (std::isfinite(newest.time) && time - newest.time < kSpacing - 1e-3) return;
+  history_[next_] = current_;  // vectors keep their storage: no allocation
+  next_ = (next_ + 1) % kHistory;
+}
+
+const MotionEvidence::Frame* MotionEvidence::older_than(double age) const {
+  const Frame* best = nullptr;
+  for (const Frame& f : history_)
+    if (std::isfinite(f.time) && f.time <= current_.time - age + 1e-9 && (best == nullptr || f.time > best->time))
+      best = &f;
+  return best;
+}
+
+bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world) const {
+  const long n = static_cast<long>(frame.returns.size());
+  if (n == 0) return false;
+  const Eigen::Vector2d q = world - frame.robot;
+  const long centre = std::lround((std::atan2(q.y(), q.x()) - frame.angle_min) / frame.increment);
+  for (long k = centre - 3; k <= centre + 2; ++k) {
+    long i = k, j = k + 1;
+    if (frame.full_circle) {
+      i = ((i % n) + n) % n;
+      j = ((j % n) + n) % n;
+    }
+    if (i < 0 || i >= n) continue;
+    const Eigen::Vector2d& a = frame.returns[static_cast<std::size_t>(i)];
+    if (!a.allFinite()) continue;
+    if ((a - world).norm() < options_.tolerance) return true;
+    if (j < 0 || j >= n) continue;
+    const Eigen::Vector2d& b = frame.returns[static_cast<std::size_t>(j)];
+    if (b.allFinite() && (b - a).norm() < kSameSurface && segment_distance(world, a, b) < options_.tolerance)
+      return true;
+  }
+  return false;
+}
+
+MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::size_t count) const {
+  if (count == 0 || !std::isfinite(current_.time)) return Verdict::unknown;
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (std::size_t i = 0; i < count; ++i) centre += points[i].position;
+  centre = current_.robot + centre / static_cast<double>(count);
+  double radius = 0.0;
+  for (std::size_t i = 0; i < count; ++i)
+    radius = std::max(radius, (current_.robot + points[i].position - centre).norm());
+  if (!std::isfinite(radius)) return Verdict::unknown;
+  const double tol = options_.tolerance;
+  bool still = true;
+  for (const double baseline : options_.baselines) {
+    const Frame* earlier = older_than(baseline);
+    if (earlier == nullptr) {
+      still = false;
+      continue;
+    }
+    // Something came: a point of the object where the earlier scan saw free space.
+    std::size_t seen = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const Eigen::Vector2d world = current_.robot + points[i].position;
+      if (earlier->free.disk_free(world - earlier->robot, tol)) return Verdict::moved;
+      if (on_surface(*earlier, world)) ++seen;
+    }
+    // Something left: an earlier return near the object where this scan sees free space.
+    const double near = radius + options_.reach * (current_.time - earlier->time) + tol;
+    for (const Eigen::Vector2d& r : earlier->returns)
+      if (r.allFinite() && (r - centre).squaredNorm() <= near * near &&
+          current_.free.disk_free(r - current_.robot, tol))
+        return Verdict::moved;
+    if (2 * seen < count) still = false;
+  }
+  return still ? Verdict::still : Verdict::unknown;
+}
+
+}  // namespace occtrack::planners::safety
