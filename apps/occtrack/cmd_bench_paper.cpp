@@ -87,6 +87,7 @@ EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_
   o.lidar_noise = "0.01";
   o.target_noise = "0.05,0.1";
   o.target_observation = "always";
+  o.planner_options.shield = false;  // the paper's comparisons: the planners alone (docs/safety.md for the layer)
   row.tune(o);
   return o;
 }

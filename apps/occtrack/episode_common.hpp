@@ -95,6 +95,7 @@ inline double value(const std::string& name, const std::string& text, const std:
 }  // namespace episode_cli
 
 struct EpisodeCliOptions {
+  EpisodeCliOptions() { planner_options.shield = true; }  // the command line's planners go through the safety layer
   std::string planner = "projcem";
   planners::PlannerOptions planner_options;
   bool delay = false;
@@ -193,9 +194,10 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))
       ->capture_default_str();
   cmd->add_flag("--delay", o.delay, "Apply each command only after its measured computation time");
-  cmd->add_flag("--shield", o.planner_options.shield,
-                "Through the safety layer: send only commands certified to leave the robot able to stop in "
-                "space the scan shows free (docs/safety.md)");
+  cmd->add_flag("--shield,!--no-shield", o.planner_options.shield,
+                "On by default: through the safety layer, send only commands certified to leave the robot able to "
+                "stop in space the scan shows free (docs/safety.md); --no-shield: the planner alone, as in the "
+                "paper's comparisons");
   cmd->add_flag("--predictor", o.planner_options.predictor,
                 "Rank plans against the target predictor (constant velocity mixed with constant turn, near "
                 "future weighted most) instead of a constant-velocity target (docs/target_prediction.md)");

@@ -315,5 +315,20 @@ else
   fail "run --json records the v2 keys" "$(tail_of "$tmp/episode_v2.json")"
 fi
 
+# The safety layer is on by default; --no-shield runs the planner alone (the result JSON has "shield" counts
+# only when the layer ran).
+run_tool run "$scenario_file" --planner follower --json "$tmp/episode_shielded.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_shielded.json" 'sum(d["shield"].values()) > 0'; then
+  pass "run goes through the safety layer by default"
+else
+  fail "run goes through the safety layer by default" "$(tail_of "$tmp/err")"
+fi
+run_tool run "$scenario_file" --planner follower --no-shield --json "$tmp/episode_bare.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_bare.json" '"shield" not in d'; then
+  pass "run --no-shield runs the planner alone"
+else
+  fail "run --no-shield runs the planner alone" "$(tail_of "$tmp/err")"
+fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
