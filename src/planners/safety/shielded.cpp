@@ -14,11 +14,20 @@ namespace {
 class Shielded final : public Planner {
  public:
   Shielded(std::unique_ptr<Planner> inner, const Settings& settings)
-      : inner_(std::move(inner)), certifier_(settings), perception_(perception::Settings::tracking()) {
+      : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings()) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
-    moving_.reserve(static_cast<std::size_t>(perception::Settings::tracking().nearest_count));
+    moving_.reserve(static_cast<std::size_t>(2 * perception_settings().nearest_count));
     candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
     memory_.reserve(kMemoryCapacity);
+  }
+
+  /// The layer's own perception: velocity tracking, over many more points than the optimizer's 60 nearest. In
+  /// clutter those 60 lie within about 1.5 m, and an obstacle closing at 3 m/s from 2 m away went unseen until
+  /// too late (Proj-CEM at compute scale 10, clutter-dynamic-2ms, dynamic-a-7; docs/safety.md).
+  static perception::Settings perception_settings() {
+    perception::Settings s = perception::Settings::tracking();
+    s.nearest_count = 400;
+    return s;
   }
 
   std::string name() const override { return inner_->name(); }
