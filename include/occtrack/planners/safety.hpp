@@ -49,7 +49,8 @@ struct Settings {
   /// estimate above it is more likely a mismatch of the tracking than an obstacle's speed).
   double moving_speed_max = 1.0;
   /// Judge each object perception reports moving against earlier scans (MotionEvidence): one the LiDAR shows
-  /// still is treated as static, unless an object the LiDAR showed moving was near it in the last 0.5 s.
+  /// still is treated as static, unless an object taken for moving (verdict moved or
+  /// unknown) was near it in the last 0.5 s.
   /// false: every velocity estimate is believed.
   bool motion_evidence = true;
   double horizon = 6.0;        ///< s; a manoeuvre that has not stopped by then is not certified

@@ -76,7 +76,7 @@ class Shielded final : public Planner {
         moving_.push_back({position, velocity});
       }
       // One object per velocity (perception gives every point of a cluster its cluster's velocity). The
-      // LiDAR's own evidence may show it still: then it is a static obstacle, unless an object shown moving
+      // LiDAR's own evidence may show it still: then it is a static obstacle, unless an object taken for moving
       // was near it lately (a reversing wall stands still for an instant).
       std::sort(moving_.begin(), moving_.end(), [](const MovingPoint& a, const MovingPoint& b) {
         return a.velocity.x() < b.velocity.x() || (a.velocity.x() == b.velocity.x() && a.velocity.y() < b.velocity.y());
@@ -94,7 +94,7 @@ class Shielded final : public Planner {
         fastest_moving_ = std::max(fastest_moving_, velocity.norm());
         for (std::size_t i = first; i < last; ++i) {
           memorize(fresh, input.robot_position + moving_[i].position, velocity, input.time,
-                   verdict == MotionEvidence::Verdict::moved);
+                   verdict != MotionEvidence::Verdict::still);
           moving_[kept++] = moving_[i];
         }
       }
@@ -200,7 +200,9 @@ class Shielded final : public Planner {
     remember(out);
   }
   /// Adds a moving point (world position) to this cycle's object of its velocity in memory_[fresh, end).
-  /// `shown`: the LiDAR's own evidence showed it moving (MotionEvidence).
+  /// `shown`: taken for moving this cycle (MotionEvidence said moved, or could not tell). Such an object blocks
+  /// a "still" verdict near it for 0.5 s: one judged "unknown" until it reverses would otherwise be dropped at
+  /// the reversal (Proj-CEM at compute scale 10, clutter-dynamic-2ms, dynamic-a-1).
   void memorize(std::size_t fresh, const Eigen::Vector2d& world, const Eigen::Vector2d& velocity, double time,
                 bool shown) {
     for (std::size_t k = fresh; k < memory_.size(); ++k)
@@ -229,7 +231,7 @@ class Shielded final : public Planner {
     return false;
   }
 
-  /// True when an object the LiDAR showed moving in the last 0.5 s (before this cycle, memory_[0, fresh)) was
+  /// True when an object taken for moving in the last 0.5 s (before this cycle, memory_[0, fresh)) was
   /// within 0.2 m, plus what it could have moved since, of one of `points` (robot-centric).
   bool shown_moving_lately(const Eigen::Vector2d& robot, const MovingPoint* points, std::size_t count, double time,
                            std::size_t fresh) const {
@@ -265,7 +267,7 @@ class Shielded final : public Planner {
   struct Seen {  // a moving object seen lately: the bounding box of its points (world), its velocity, when
     Eigen::Vector2d lo, hi, velocity;
     double time = 0.0;
-    bool shown = false;  // the LiDAR's own evidence showed it moving
+    bool shown = false;  // taken for moving by the LiDAR's own evidence (moved or unknown)
   };
   std::vector<Seen> memory_;
   static constexpr double kMovingMemory = 0.5;      // s
