@@ -251,6 +251,46 @@ TEST(Certifier, MovingPointsMayTurnOrReverseWhileTheRobotMoves) {
   EXPECT_TRUE(may_turn.certify(Vec2(0.5, 0.0)));
 }
 
+TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {
+  // At rest, the robot stays where it stopped: a point coming straight at it must not reach it within
+  // moving_horizon. 2.5 m ahead at 1 m/s, it is 0.5 m away at 2 s: clear through 2 s, not through 2.5 s.
+  const core::Scan open = make_scan([](double) { return kInf; });
+  const std::vector<MovingPoint> oncoming = {{Vec2(2.5, 0.0), Vec2(-1.0, 0.0)}};
+  planners::safety::Settings longer = certifier_settings();
+  longer.moving_horizon = 2.5;
+  Certifier two(certifier_settings()), two_and_a_half(longer);
+  double distance = 0.0;
+  two.begin(open, Vec2::Zero(), Vec2::Zero(), oncoming);
+  EXPECT_TRUE(two.certify(Vec2::Zero(), &distance));
+  EXPECT_NEAR(distance, 0.5, 1e-9);  // the closest approach in closed form, at the horizon
+  two_and_a_half.begin(open, Vec2::Zero(), Vec2::Zero(), oncoming);
+  EXPECT_FALSE(two_and_a_half.certify(Vec2::Zero(), &distance));
+  EXPECT_NEAR(distance, 0.0, 1e-9);
+  // Stopping beside its lane is fine: the point passes 0.4 m away.
+  two_and_a_half.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(2.5, 0.4), Vec2(-1.0, 0.0)}});
+  EXPECT_TRUE(two_and_a_half.certify(Vec2::Zero(), &distance));
+  EXPECT_NEAR(distance, 0.4, 1e-9);
+  // A point that passes before the robot has stopped counts where the robot was then, not where it stops.
+  Certifier moving(certifier_settings());
+  moving.begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), {{Vec2(0.2, 2.0), Vec2(0.0, -4.0)}});
+  EXPECT_FALSE(moving.certify(Vec2::Zero()));
+}
+
+TEST(Certifier, ASmallerClearanceForTheLastResort) {
+  // Braking from 1.7 m/s takes 0.72 m: a wall 1 m ahead leaves 0.28 m, less than the 0.3 m clearance but
+  // more than the robot's 0.25 m radius.
+  const core::Scan scan = make_scan([](double a) { return wall_range(a, 1.0); });
+  Certifier c(certifier_settings());
+  c.begin(scan, Vec2(1.7, 0.0), Vec2(1.7, 0.0), {});
+  EXPECT_FALSE(c.check(Vec2::Zero(), c.hold(), true).in_free_space);
+  EXPECT_TRUE(c.check(Vec2::Zero(), c.hold(), true, 0.25).in_free_space);
+  EXPECT_FALSE(c.check(Vec2::Zero(), c.hold(), true, 0.29).in_free_space);
+  // Never more than the cycle's own clearance.
+  EXPECT_FALSE(c.check(Vec2::Zero(), c.hold(), true, 0.5).in_free_space);
+  c.begin(scan, Vec2(1.5, 0.0), Vec2(1.5, 0.0), {});
+  EXPECT_TRUE(c.check(Vec2::Zero(), c.hold(), true, 0.5).certified);
+}
+
 TEST(Certifier, RejectsBadSettings) {
   planners::safety::Settings s;
   s.margin = -0.1;
@@ -343,6 +383,54 @@ TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   EXPECT_EQ(safe.metrics.collisions, 0);
   EXPECT_GT(safe.metrics.min_clearance_m, 0.0);
   EXPECT_GT(safe.metrics.shield.evasive, 0);
+}
+
+/// One cycle of a shielded planner at rest at the origin with this scan.
+planners::PlannerOutput plan_once(planners::Planner& planner, const core::Scan& scan, double time,
+                                  const Vec2& velocity = Vec2::Zero()) {
+  planners::PlannerInput input;
+  input.time = time;
+  input.robot_velocity = velocity;
+  input.target_position = Vec2(0.0, 3.0);
+  input.scan = &scan;
+  planners::PlannerOutput out;
+  planner.plan(input, out);
+  return out;
+}
+
+TEST(ShieldEpisode, WhenNothingKeepsTheMarginTheBestEffortStillWeighsTheManoeuvres) {
+  // At 1.7 m/s towards a wall 1 m ahead, nothing stays 0.3 m off it, but braking stays 0.28 m off: more than
+  // the robot's 0.25 m. The layer sends its best effort, not a blind full brake, and that effort stays clear.
+  planners::safety::Settings s = certifier_settings();
+  auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(Vec2(2.0, 0.0)), s);
+  core::Scan scan = make_scan([](double a) { return wall_range(a, 1.0); });
+  const planners::PlannerOutput out = plan_once(*shielded, scan, 0.0, Vec2(1.7, 0.0));
+  EXPECT_EQ(out.safety, planners::SafetyAction::best_effort);
+  Certifier c(s);
+  c.begin(scan, Vec2(1.7, 0.0), Vec2(1.7, 0.0), {});
+  EXPECT_TRUE(c.check(out.command_velocity, 1.5, true, 0.25).in_free_space);
+  // Where not even that is possible (the wall 0.95 m ahead), a full brake.
+  scan = make_scan([](double a) { return wall_range(a, 0.95); });
+  shielded->reset();
+  EXPECT_EQ(plan_once(*shielded, scan, 0.0, Vec2(1.7, 0.0)).safety, planners::SafetyAction::brake);
+}
+
+TEST(ShieldEpisode, AnObstacleComingIntoViewCountsAsMovingSoonAtLongCycles) {
+  // A slow planner (0.19 s latency: one cycle per 0.2 s) at rest, and a 0.3 m box coming at 2 m/s from 4 m.
+  // Perception's tracks report a velocity only once they span 0.25 s (three scans here, not six): by the third
+  // scan (box 3.2 m away, reaching the robot within 2 s) standing still is no longer certified.
+  planners::safety::Settings s = certifier_settings(0.25, 0.19);
+  auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), s);
+  std::vector<planners::SafetyAction> actions;
+  for (int k = 0; k < 3; ++k) {
+    const double t = 0.2 * k;
+    core::Scan scan = world_scan({box(Vec2(4.0 - 2.0 * t, 0.0), Vec2(0.3, 0.3))});
+    scan.time = t;
+    actions.push_back(plan_once(*shielded, scan, t).safety);
+  }
+  EXPECT_EQ(actions[0], planners::SafetyAction::plan);
+  EXPECT_EQ(actions[1], planners::SafetyAction::plan);
+  EXPECT_EQ(actions[2], planners::SafetyAction::evasive);
 }
 
 TEST(ShieldEpisode, KeepsOffAnObstacleThatMayReverse) {

@@ -38,7 +38,8 @@ enum class SafetyAction {
   alternative,  ///< a lower-ranked candidate of the planner was the best certified one
   stop,         ///< no candidate was certified; braking to a stop was
   evasive,      ///< neither; a certified evasive command (away from approaching obstacles) was sent
-  best_effort,  ///< nothing certified: the manoeuvre in known-free space farthest from moving obstacles' paths
+  best_effort,  ///< nothing certified: the manoeuvre in known-free space (with the margin, else at the bare
+                ///< radius) farthest from moving obstacles' paths
   brake,        ///< nothing could be certified, nor stays in known-free space: full brake (command zero)
 };
 

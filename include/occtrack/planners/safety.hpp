@@ -11,8 +11,9 @@
 //   certifier.certify(command);    // hold it, then brake: stays in known free space and clear?
 //
 // make_shielded() wraps any planner: it certifies the planner's command, else its lower-ranked candidates
-// (PlannerOutput::ranked_commands), else a certified stop or evasive manoeuvre, else brakes in full, and says
-// which in PlannerOutput::safety.
+// (PlannerOutput::ranked_commands), else a certified stop or evasive manoeuvre, else its best effort (the
+// manoeuvre that stays in known-free space, at the clearance or else at the bare radius, farthest from moving
+// points), else brakes in full, and says which in PlannerOutput::safety.
 //
 // Frames: robot-centric positions (the robot at the origin at scan time, axes of the world), world velocities.
 #pragma once
@@ -39,7 +40,9 @@ struct Settings {
   double speed_max = 2.0;      ///< m/s, fastest evasive command
   double step = 0.01;          ///< s, integration step of the certification (the simulator's physics step)
   double check_spacing = 0.02; ///< m the robot may travel between two checks (at most 0.1 s apart)
-  double moving_horizon = 2.0; ///< s after the scan through which moving points are followed
+  /// s after the scan through which moving points are followed; a manoeuvre that stops earlier must leave the
+  /// robot clear of their straight paths through then (a stop in an oncoming obstacle's lane is not certified).
+  double moving_horizon = 2.0;
   /// Passive safety against a moving obstacle that stops or reverses (its constant-velocity prediction does not
   /// see it coming): until the robot has stopped, it must stay clear of everywhere each moving point could be
   /// along its line of motion, forwards or backwards, at the fastest speed any moving point has shown this
@@ -137,7 +140,12 @@ class Certifier {
     bool in_free_space = false;
     double min_distance = INFINITY;
   };
-  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end) const;
+  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end) const {
+    return check(command, hold_time, to_the_end, clearance_);
+  }
+  /// The same, at another clearance (at most clearance()): the safety layer's last resort, when nothing keeps
+  /// the margin, weighs the manoeuvres at the robot's bare radius.
+  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance) const;
   /// The clearance this cycle certifies with (see the class comment).
   double clearance() const { return clearance_; }
   /// The time the candidate command is held: the replanning interval.

@@ -93,10 +93,21 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   clearance_ = std::max(0.0, std::min({settings_.clearance(), free_.nearest() - 0.005, nearest_moving - 0.005}));
 }
 
-Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_time, bool to_the_end) const {
+namespace {
+/// The smallest distance from the origin of a point at r + w t, t in [t0, t1].
+double closest_approach(const Eigen::Vector2d& r, const Eigen::Vector2d& w, double t0, double t1) {
+  const double ww = w.squaredNorm();
+  const double t = ww > 0.0 ? std::clamp(-r.dot(w) / ww, t0, t1) : t0;
+  return (r + w * t).norm();
+}
+}  // namespace
+
+Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_time, bool to_the_end,
+                                    double clearance) const {
   Verdict verdict;
+  const double keep = std::min(clearance, clearance_);  // the clearance kept: never more than this cycle's
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
-  if (!command.allFinite() || !std::isfinite(hold_time) || !(clearance_ > 0.0)) return verdict;
+  if (!command.allFinite() || !std::isfinite(hold_time) || !(keep > 0.0)) return verdict;
   const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
   const double lag = response.lag(), limit = response.limit(), dt = settings_.step;
   const double L = settings_.latency, hold_end = L + std::max(hold(), hold_time);
@@ -117,22 +128,39 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
     since_check += dt;
     const double now = t + dt;
     const bool braking = now >= hold_end - 1e-12;
+    // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
+    // is well inside the margin), so the rest is one check in closed form.
     const bool stopped = braking && speed < 5e-3;
-    const bool watching = !moving_.empty() && now <= settings_.moving_horizon + 1e-12;
-    const bool done = stopped && !watching;
-    if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !done) continue;
+    if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
     travelled = since_check = 0.0;
-    if (!free_.disk_free(p, clearance_)) return verdict;  // leaves known-free space: neither
+    if (!free_.disk_free(p, keep)) return verdict;  // leaves known-free space: neither
+    if (stopped) {
+      verdict.in_free_space = true;
+      // At rest until moving_horizon: clear of every moving point's straight path through then (a stop in an
+      // oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon away).
+      const double t0 = now, t1 = std::max(now, settings_.moving_horizon);
+      for (const Group& g : groups_) {
+        const double bound = closest_approach(g.center - p, g.velocity, t0, t1) - g.radius;
+        if (bound >= keep && bound >= verdict.min_distance) continue;
+        for (std::size_t i = g.first; i < g.last; ++i) {
+          const double distance = closest_approach(moving_[i].position - p, g.velocity, t0, t1);
+          verdict.min_distance = std::min(verdict.min_distance, distance);
+          if (distance < keep) too_near = true;
+        }
+      }
+      verdict.certified = !too_near;
+      return verdict;
+    }
     if (now <= settings_.moving_horizon + 1e-12)
       for (const Group& g : groups_) {
         // A lower bound of the group's distance, from its bounding circle: enough when it is clear and no
         // nearer than what min_distance holds already.
         const double bound = (p - (g.center + g.velocity * now)).norm() - g.radius;
-        if (bound >= clearance_ && bound >= verdict.min_distance) continue;
+        if (bound >= keep && bound >= verdict.min_distance) continue;
         for (std::size_t i = g.first; i < g.last; ++i) {
           const double distance = (p - (moving_[i].position + g.velocity * now)).norm();
           verdict.min_distance = std::min(verdict.min_distance, distance);
-          if (distance < clearance_) too_near = true;
+          if (distance < keep) too_near = true;
         }
         if (too_near && !to_the_end) return verdict;
       }
@@ -144,7 +172,7 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
       for (const Group& g : groups_) {
         const double r = g.reach * now, speed_of = g.velocity.norm();
         if (r <= 0.0) continue;
-        if ((p - g.center).norm() - g.radius - r >= clearance_) continue;  // out of the whole disk's reach
+        if ((p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach
         // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
         const Eigen::Vector2d ahead = speed_of > 0.0 ? Eigen::Vector2d(g.velocity / speed_of) : Eigen::Vector2d::Zero();
         for (std::size_t i = g.first; i < g.last; ++i) {
@@ -157,7 +185,7 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
             const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);
             distance = std::sqrt(std::min(a * a + across * across, behind * behind + side * side));  // half disk, segment
           }
-          if (distance < clearance_) {
+          if (distance < keep) {
             too_near = true;
             break;
           }
@@ -167,12 +195,6 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
           break;
         }
       }
-    // Stopped: what is left to travel is below v * (tau + step), well inside the margin.
-    if (done) {
-      verdict.in_free_space = true;
-      verdict.certified = !too_near;
-      return verdict;
-    }
   }
   return verdict;  // still moving at the horizon
 }

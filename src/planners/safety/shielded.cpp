@@ -14,9 +14,9 @@ namespace {
 class Shielded final : public Planner {
  public:
   Shielded(std::unique_ptr<Planner> inner, const Settings& settings)
-      : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings()) {
+      : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings(certifier_.hold())) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
-    moving_.reserve(static_cast<std::size_t>(2 * perception_settings().nearest_count));
+    moving_.reserve(static_cast<std::size_t>(2 * perception_settings(certifier_.hold()).nearest_count));
     candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
     memory_.reserve(kMemoryCapacity);
   }
@@ -24,9 +24,16 @@ class Shielded final : public Planner {
   /// The layer's own perception: velocity tracking, over many more points than the optimizer's 60 nearest. In
   /// clutter those 60 lie within about 1.5 m, and an obstacle closing at 3 m/s from 2 m away went unseen until
   /// too late (Proj-CEM at compute scale 10, clutter-dynamic-2ms, dynamic-a-7; docs/safety.md).
-  static perception::Settings perception_settings() {
+  ///
+  /// A new track reports no velocity until it spans min_track_scans scans: 0.25 s at one scan per 0.05 s. At
+  /// longer cycles (`cycle`, s: a slow planner's latency) that many scans took over a second, through which an
+  /// obstacle coming into view counted as static (Proj-CEM at compute scale 10, clutter-dynamic-2ms,
+  /// dynamic-a-7: a cylinder coming into view 1.9 m away was first reported moving under 1 m away). So the span is kept
+  /// at 0.25 s, with at least three scans (two are too noisy; MotionEvidence then says whether it moved).
+  static perception::Settings perception_settings(double cycle) {
     perception::Settings s = perception::Settings::tracking();
     s.nearest_count = 400;
+    s.min_track_scans = std::clamp(static_cast<int>(std::ceil(0.25 / cycle - 1e-9)) + 1, 3, s.min_track_scans);
     return s;
   }
 
@@ -70,7 +77,10 @@ class Shielded final : public Planner {
       const auto& nearest = observation_.nearest;
       forget_before(input.time - kMovingMemory);
       const std::size_t fresh = memory_.size();  // this cycle's objects go after the remembered ones
-      for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
+      // With fewer voxel points than rows, perception pads with copies of the nearest point (row 0): one point,
+      // which must not outweigh the rest of its object when MotionEvidence counts points on a surface.
+      const Eigen::Index rows = distinct_rows(nearest);
+      for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1)), velocity(nearest(i, 2), nearest(i, 3));
         if (!position.allFinite() || !velocity.allFinite() || velocity.isZero()) continue;
         moving_.push_back({position, velocity});
@@ -99,7 +109,7 @@ class Shielded final : public Planner {
         }
       }
       moving_.resize(kept);
-      for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
+      for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
         // Reported still, but where something moved within the last 0.5 s: an obstacle reversing passes
@@ -154,13 +164,20 @@ class Shielded final : public Planner {
       evasive_left_ -= interval;
       return send(out, evasive_, SafetyAction::evasive);
     }
-    Choice effort;  // farthest from the moving points' predictions, then nearest the wish
-    if (still.in_free_space) effort.offer(Eigen::Vector2d::Zero(), still.min_distance, wish.norm(), interval);
-    for (const Candidate& c : candidates_) {
-      const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true);
-      if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
+    // Nothing stays in known-free space with the margin: weigh the manoeuvres again at the robot's bare radius
+    // rather than brake blind (Proj-CEM at compute scale 10, clutter-dynamic-2ms, dynamic-a-7: a full brake
+    // where thousands of manoeuvres were clear; docs/safety.md).
+    for (const double clearance : {certifier_.clearance(), std::min(certifier_.clearance(), s.robot_radius)}) {
+      Choice effort;  // farthest from the moving points' predictions, then nearest the wish
+      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
+      if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
+      for (const Candidate& c : candidates_) {
+        const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance);
+        if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
+      }
+      if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
+      if (!(clearance > s.robot_radius)) break;  // no margin to give up
     }
-    if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
     // 3. In contact (or closer than nothing can be checked against): head straight away from the nearest return.
     const FreeSpace& free = certifier_.free_space();
     if (free.nearest() > 0.0 && free.nearest() < s.clearance()) {
@@ -169,6 +186,14 @@ class Shielded final : public Planner {
     }
     evasive_left_ = 0.0;
     remember(out);  // 4. full brake (command zero), uncertified
+  }
+
+  /// The rows of `nearest` before perception's padding: trailing rows that copy row 0.
+  template <typename Rows>
+  static Eigen::Index distinct_rows(const Rows& nearest) {
+    Eigen::Index rows = nearest.rows();
+    while (rows > 1 && nearest.row(rows - 1) == nearest.row(0)) --rows;
+    return rows;
   }
 
   struct Candidate {
