@@ -28,8 +28,9 @@ class Shielded final : public Planner {
   /// A new track reports no velocity until it spans min_track_scans scans: 0.25 s at one scan per 0.05 s. At
   /// longer cycles (`cycle`, s: a slow planner's latency) that many scans took over a second, through which an
   /// obstacle coming into view counted as static (Proj-CEM at compute scale 10, clutter-dynamic-2ms,
-  /// dynamic-a-7: a cylinder coming into view 1.9 m away was first reported moving under 1 m away). So the span is kept
-  /// at 0.25 s, with at least three scans (two are too noisy; MotionEvidence then says whether it moved).
+  /// dynamic-a-7: a cylinder in view 1.9 m away, closing, was taken for static until under 1 m). So the span
+  /// is kept at 0.25 s, with at least three scans (two are too noisy; MotionEvidence then says whether it
+  /// moved).
   static perception::Settings perception_settings(double cycle) {
     perception::Settings s = perception::Settings::tracking();
     s.nearest_count = 400;
