@@ -134,36 +134,38 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
     if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
     travelled = since_check = 0.0;
     if (!free_.disk_free(p, keep)) return verdict;  // leaves known-free space: neither
+    // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
+    // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and no nearer
+    // than what min_distance holds already. True when a point came closer than the clearance (now or earlier); with
+    // `stop_early`, the groups after that one are not looked at.
+    const auto near_moving = [&](auto&& distance, bool stop_early) {
+      for (const Group& g : groups_) {
+        const double bound = distance(g.center, g.velocity) - g.radius;
+        if (bound >= keep && bound >= verdict.min_distance) continue;
+        for (std::size_t i = g.first; i < g.last; ++i) {
+          const double d = distance(moving_[i].position, g.velocity);
+          verdict.min_distance = std::min(verdict.min_distance, d);
+          if (d < keep) too_near = true;
+        }
+        if (too_near && stop_early) return true;
+      }
+      return too_near;
+    };
     if (stopped) {
       verdict.in_free_space = true;
       // At rest until moving_horizon: clear of every moving point's straight path through then (a stop in an
       // oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon away).
       const double t0 = now, t1 = std::max(now, settings_.moving_horizon);
-      for (const Group& g : groups_) {
-        const double bound = closest_approach(g.center - p, g.velocity, t0, t1) - g.radius;
-        if (bound >= keep && bound >= verdict.min_distance) continue;
-        for (std::size_t i = g.first; i < g.last; ++i) {
-          const double distance = closest_approach(moving_[i].position - p, g.velocity, t0, t1);
-          verdict.min_distance = std::min(verdict.min_distance, distance);
-          if (distance < keep) too_near = true;
-        }
-      }
+      near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - p, w, t0, t1); },
+                  false);
       verdict.certified = !too_near;
       return verdict;
     }
-    if (now <= settings_.moving_horizon + 1e-12)
-      for (const Group& g : groups_) {
-        // A lower bound of the group's distance, from its bounding circle: enough when it is clear and no
-        // nearer than what min_distance holds already.
-        const double bound = (p - (g.center + g.velocity * now)).norm() - g.radius;
-        if (bound >= keep && bound >= verdict.min_distance) continue;
-        for (std::size_t i = g.first; i < g.last; ++i) {
-          const double distance = (p - (moving_[i].position + g.velocity * now)).norm();
-          verdict.min_distance = std::min(verdict.min_distance, distance);
-          if (distance < keep) too_near = true;
-        }
-        if (too_near && !to_the_end) return verdict;
-      }
+    if (now <= settings_.moving_horizon + 1e-12 &&
+        near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (p - (q + w * now)).norm(); },
+                    !to_the_end) &&
+        !to_the_end)
+      return verdict;
     // Passive safety: while the robot moves, clear of wherever a moving point could be had it turned by up to
     // 90 degrees (a half disk ahead of it) or reversed (a segment behind it) at its reach speed. (Stopped here
     // once under 5 cm/s: what is left to travel, under 5 cm/s * (tau + step), is negligible against the reach,

@@ -16,7 +16,7 @@ class Shielded final : public Planner {
   Shielded(std::unique_ptr<Planner> inner, const Settings& settings)
       : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings(certifier_.hold())) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
-    moving_.reserve(static_cast<std::size_t>(2 * perception_settings(certifier_.hold()).nearest_count));
+    moving_.reserve(static_cast<std::size_t>(2 * perception_.settings().nearest_count));
     candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
     memory_.reserve(kMemoryCapacity);
   }
@@ -170,7 +170,8 @@ class Shielded final : public Planner {
     // where thousands of manoeuvres were clear; docs/safety.md).
     for (const double clearance : {certifier_.clearance(), std::min(certifier_.clearance(), s.robot_radius)}) {
       Choice effort;  // farthest from the moving points' predictions, then nearest the wish
-      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
+      const Certifier::Verdict rest =
+          clearance == certifier_.clearance() ? still : certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
       if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
       for (const Candidate& c : candidates_) {
         const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance);
