@@ -92,6 +92,19 @@ TEST(ModelFile, WriterAndReaderAreInverses) {
   no_band.metadata.erase("band");
   EXPECT_FALSE(io::to_tensor_file(no_band).metadata.count("band"));
   EXPECT_FALSE(io::validate_model_file(io::to_tensor_file(no_band)).band.has_value());
+  // Nor does the writer add a rho the file did not record (found by fuzz_model_file): the policy would then
+  // refuse run settings whose rho differs from the default, which the file as read accepted.
+  io::TensorFile no_rho_file = io::to_tensor_file(m);
+  nlohmann::json projection = nlohmann::json::parse(no_rho_file.meta("projection"));
+  ASSERT_TRUE(projection.contains("rho"));
+  projection.erase("rho");
+  no_rho_file.metadata["projection"] = projection.dump();
+  const io::ModelFile no_rho = io::validate_model_file(no_rho_file);
+  EXPECT_FALSE(no_rho.projection_has_rho);
+  const io::TensorFile rewritten = io::to_tensor_file(no_rho);
+  EXPECT_FALSE(nlohmann::json::parse(rewritten.meta("projection")).contains("rho"));
+  EXPECT_FALSE(io::validate_model_file(rewritten).projection_has_rho);
+  EXPECT_EQ(io::validate_model_file(rewritten).projection, no_rho.projection);
 }
 
 TEST(ModelFile, VariantSpellings) {

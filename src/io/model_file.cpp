@@ -358,6 +358,9 @@ TensorFile to_tensor_file(const ModelFile& m) {
   file.metadata["network"] = m.network.to_json();
   json projection = json::parse(projection_settings_json(m.projection));
   projection["training_iterations"] = m.projection.iterations;
+  // A file that did not record rho is written without it: check_projection compares rho only when the file
+  // records one, so writing the default here would change what the file asks of the run's settings.
+  if (!m.projection_has_rho) projection.erase("rho");
   file.metadata["projection"] = projection.dump();
   if (m.band) file.metadata["band"] = band_json(*m.band);
   file.tensors = m.tensors;

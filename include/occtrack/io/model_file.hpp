@@ -127,6 +127,7 @@ struct ModelFile {
   /// network.nearest_points; batch and threads keep their defaults.
   projection::Settings projection;
   /// Whether the file's `projection` records rho (policy::Model::check_projection compares it only then).
+  /// to_tensor_file writes rho only when this is true, so a file keeps its answer through a round trip.
   bool projection_has_rho = true;
   /// Metadata `band`, or `ranking` holding {"band": {...}}, when the file records one.
   std::optional<core::TrackingBand> band;
