@@ -251,6 +251,57 @@ TEST(Certifier, MovingPointsMayTurnOrReverseWhileTheRobotMoves) {
   EXPECT_TRUE(may_turn.certify(Vec2(0.5, 0.0)));
 }
 
+TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
+  // Without min_distance, certify_held checks the manoeuvre's checkpoints from its stop backwards and skips
+  // objects whose bounding circle stays clear; with it, it follows the manoeuvre forwards and measures every
+  // object. The best effort's give_up_at drops a manoeuvre once it comes that near. None of these may change
+  // a verdict: random scenes of walls and moving objects, random commands.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int certified = 0, refused = 0, given_up = 0;
+  for (int scene = 0; scene < 40; ++scene) {
+    // Ranges piecewise constant over blocks of 12 beams, 0.8 to 4 m, some without a return.
+    std::vector<double> block(30);
+    for (double& r : block) r = unit(rng) < 0.15 ? kInf : 0.8 + 3.2 * unit(rng);
+    const core::Scan scan = make_scan([&](double a) { return block[static_cast<std::size_t>(a / (2.0 * kPi) * 360.0) / 12 % 30]; });
+    // Four objects of six points each (shared velocities, one of them still), 1 to 4 m away.
+    std::vector<MovingPoint> moving;
+    for (int object = 0; object < 4; ++object) {
+      const double bearing = 2.0 * kPi * unit(rng), range = 1.0 + 3.0 * unit(rng);
+      const Vec2 velocity = object == 3 ? Vec2::Zero() : Vec2(2.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
+      for (int i = 0; i < 6; ++i)
+        moving.push_back({Vec2(range * std::cos(bearing), range * std::sin(bearing)) + 0.1 * i * Vec2(1.0, 0.5),
+                          velocity});
+    }
+    Certifier c(certifier_settings(0.25, 0.05));
+    const Vec2 velocity(1.5 * unit(rng) - 0.75, 1.5 * unit(rng) - 0.75);
+    c.begin(scan, velocity, velocity, moving, 1.0);
+    for (int k = 0; k < 25; ++k) {
+      const double angle = 2.0 * kPi * unit(rng), speed = 2.0 * unit(rng), hold = c.hold() + 1.5 * unit(rng);
+      const Vec2 command = speed * Vec2(std::cos(angle), std::sin(angle));
+      double distance = 0.0;
+      const bool backwards = c.certify_held(command, hold), forwards = c.certify_held(command, hold, &distance);
+      ASSERT_EQ(backwards, forwards) << "scene " << scene << ", command " << command.transpose() << ", hold " << hold;
+      ++(backwards ? certified : refused);
+      const Certifier::Verdict whole = c.check(command, hold, true);
+      const double give_up_at = std::isfinite(whole.min_distance) ? whole.min_distance - 0.05 + 0.1 * unit(rng) : 1.0;
+      const Certifier::Verdict cut = c.check(command, hold, true, c.clearance(), give_up_at);
+      if (whole.min_distance <= give_up_at) {
+        EXPECT_FALSE(cut.in_free_space);
+        ++given_up;
+      } else {
+        EXPECT_EQ(cut.in_free_space, whole.in_free_space);
+        EXPECT_EQ(cut.certified, whole.certified);
+        EXPECT_EQ(cut.min_distance, whole.min_distance);
+      }
+    }
+  }
+  // Not a vacuous comparison: both verdicts, and both sides of give_up_at, occur.
+  EXPECT_GT(certified, 50);
+  EXPECT_GT(refused, 50);
+  EXPECT_GT(given_up, 50);
+}
+
 TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {
   // At rest, the robot stays where it stopped: a point coming straight at it must not reach it within
   // moving_horizon. 2.5 m ahead at 1 m/s, it is 0.5 m away at 2 s: clear through 2 s, not through 2.5 s.

@@ -127,7 +127,7 @@ class Certifier {
   /// The same with the command held for `hold_time` (at least hold()) before braking: an evasive manoeuvre,
   /// whose contingency is its own continuation rather than braking at the next cycle.
   bool certify_held(const Eigen::Vector2d& command, double hold_time, double* min_distance = nullptr) const {
-    const Verdict v = check(command, hold_time, false);
+    const Verdict v = follow(command, hold_time, false, clearance_, min_distance != nullptr, -INFINITY);
     if (min_distance) *min_distance = v.min_distance;
     return v.certified;
   }
@@ -145,7 +145,13 @@ class Certifier {
   }
   /// The same, at another clearance (at most clearance()): the safety layer's last resort, when nothing keeps
   /// the margin, weighs the manoeuvres at the robot's bare radius.
-  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance) const;
+  ///
+  /// `give_up_at`: once min_distance falls to this or below, the manoeuvre is dropped (neither certified nor in
+  /// free space): the best effort's search, where a manoeuvre that comes that near cannot beat the best so far.
+  Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance,
+                double give_up_at = -INFINITY) const {
+    return follow(command, hold_time, to_the_end, clearance, true, give_up_at);
+  }
   /// The clearance this cycle certifies with (see the class comment).
   double clearance() const { return clearance_; }
   /// The time the candidate command is held: the replanning interval.
@@ -153,11 +159,22 @@ class Certifier {
   const FreeSpace& free_space() const { return free_; }
 
  private:
+  /// check()'s simulation. Without `distances`, min_distance is only kept for the points that come within the
+  /// clearance (the verdict is the same; objects whose bounding circle stays clear are not looked into).
+  Verdict follow(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance, bool distances,
+                 double give_up_at) const;
+
   Settings settings_;
   FreeSpace free_;
+  struct Checkpoint {  // where follow() checks a manoeuvre
+    Eigen::Vector2d p;
+    double now;
+    bool stopped, passive;  // at rest (the last); still moving enough for passive safety
+  };
+  mutable std::vector<Checkpoint> checkpoints_;  // follow()'s scratch (so one Certifier serves one thread)
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
-  std::vector<MovingPoint> moving_;  // sorted by velocity: the points of one object together
-  struct Group {                     // the moving points sharing one velocity (one object)
+  std::vector<MovingPoint> moving_;  // sorted by velocity, then bearing: the points of one object together
+  struct Group {                     // a run of neighbouring moving points sharing one velocity (of one object)
     std::size_t first = 0, last = 0; // moving_[first, last)
     Eigen::Vector2d center = Eigen::Vector2d::Zero(), velocity = Eigen::Vector2d::Zero();
     double radius = 0.0;             // of the circle about center holding every point

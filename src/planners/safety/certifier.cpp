@@ -30,9 +30,20 @@ bool Settings::validate(std::string* error) const {
   return c.done(error);
 }
 
+namespace {
+/// A cheap stand-in for the bearing atan2(y, x), increasing with it over (-pi, pi] (0 at the origin).
+double pseudo_angle(const Eigen::Vector2d& v) {
+  const double sum = std::abs(v.x()) + std::abs(v.y());
+  if (!(sum > 0.0)) return 0.0;
+  const double r = v.y() / sum;  // -1 .. 1
+  return v.x() >= 0.0 ? r : (v.y() >= 0.0 ? 2.0 - r : -2.0 - r);
+}
+}  // namespace
+
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
-  moving_.reserve(64);  // perception's nearest points (60 by default): no allocation while cycles run
-  groups_.reserve(64);
+  moving_.reserve(512);  // the safety layer's 400 tracked points: no allocation while cycles run
+  groups_.reserve(512);
+  checkpoints_.reserve(static_cast<std::size_t>(std::ceil(settings_.horizon / settings_.step)) + 1);
 }
 
 double Certifier::hold() const {
@@ -65,14 +76,22 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     moving_.push_back(m);
     nearest_moving = std::min(nearest_moving, distance);
   }
-  // Points of one object share its velocity (perception's clusters): grouped, each group bounded by a circle,
-  // so that check() passes over a group far from the robot at the cost of one distance.
+  // Points of one object share its velocity (perception's clusters). Within one velocity, ordered by bearing
+  // and cut into runs of neighbouring points, each bounded by a circle, so that check() passes over a run far
+  // from the robot at the cost of one distance. (The points reported still where something moved lately all
+  // share velocity zero: uncut, one circle would hold all of them, and every check would look at each.)
   std::sort(moving_.begin(), moving_.end(), [](const MovingPoint& a, const MovingPoint& b) {
-    return a.velocity.x() < b.velocity.x() || (a.velocity.x() == b.velocity.x() && a.velocity.y() < b.velocity.y());
+    if (a.velocity.x() != b.velocity.x()) return a.velocity.x() < b.velocity.x();
+    if (a.velocity.y() != b.velocity.y()) return a.velocity.y() < b.velocity.y();
+    return pseudo_angle(a.position) < pseudo_angle(b.position);
   });
+  constexpr std::size_t kRunPoints = 16;  // at most, per run
+  constexpr double kRunSpan = 0.5;        // m, at most from the run's first point
   for (std::size_t i = 0; i < moving_.size();) {
     std::size_t end = i + 1;
-    while (end < moving_.size() && moving_[end].velocity == moving_[i].velocity) ++end;
+    while (end < moving_.size() && moving_[end].velocity == moving_[i].velocity && end - i < kRunPoints &&
+           (moving_[end].position - moving_[i].position).norm() <= kRunSpan)
+      ++end;
     Group g;
     g.first = i;
     g.last = end;
@@ -100,10 +119,21 @@ double closest_approach(const Eigen::Vector2d& r, const Eigen::Vector2d& w, doub
   const double t = ww > 0.0 ? std::clamp(-r.dot(w) / ww, t0, t1) : t0;
   return (r + w * t).norm();
 }
+
+/// The distance from a point at q (relative to a moving point) to where that point could be by now had it
+/// turned by up to 90 degrees (a half disk of radius r ahead of it, along the unit `ahead`) or reversed (a
+/// segment of length r behind it); without a heading (`ahead` zero), the whole disk. Negative inside the disk.
+double passive_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& ahead, double r) {
+  const double a = q.dot(ahead);
+  if (a >= 0.0 || ahead.isZero()) return q.norm() - r;
+  const double side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
+  const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);
+  return std::sqrt(std::min(a * a + across * across, behind * behind + side * side));  // half disk, segment
+}
 }  // namespace
 
-Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_time, bool to_the_end,
-                                    double clearance) const {
+Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold_time, bool to_the_end,
+                                     double clearance, bool distances, double give_up_at) const {
   Verdict verdict;
   const double keep = std::min(clearance, clearance_);  // the clearance kept: never more than this cycle's
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
@@ -113,90 +143,115 @@ Certifier::Verdict Certifier::check(const Eigen::Vector2d& command, double hold_
   const double L = settings_.latency, hold_end = L + std::max(hold(), hold_time);
   // Between two checks the robot travels at most check_spacing, and no more than this much time passes.
   const double max_gap = moving_.empty() ? 0.1 : 0.02;
-  const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
-  Eigen::Vector2d p = zero, v = velocity_;
-  double travelled = 0.0, since_check = 0.0;
+
+  // The manoeuvre, step by step, and where it is checked.
+  checkpoints_.clear();
+  {
+    const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
+    Eigen::Vector2d p = zero, v = velocity_;
+    double travelled = 0.0, since_check = 0.0;
+    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
+    for (long k = 0; k < steps; ++k) {
+      const double t = k * dt;  // the step's start; its command
+      const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
+      v += core::velocity_change(v, *u, lag, limit);
+      p += v * dt;
+      const double speed = v.norm();
+      travelled += speed * dt;
+      since_check += dt;
+      const double now = t + dt;
+      const bool braking = now >= hold_end - 1e-12;
+      // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
+      // is well inside the margin), so the rest is one check in closed form.
+      const bool stopped = braking && speed < 5e-3;
+      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
+      travelled = since_check = 0.0;
+      // Passive safety holds while the robot moves: stopped here once under 5 cm/s while braking (what is left
+      // to travel, under 5 cm/s * (tau + step), is negligible against the reach, which would otherwise keep
+      // growing through the lag's exponential tail).
+      checkpoints_.push_back({p, now, stopped, !(braking && speed < 0.05)});
+      if (stopped) break;
+    }
+  }
+
   bool too_near = false;
-  const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
-  for (long k = 0; k < steps; ++k) {
-    const double t = k * dt;  // the step's start; its command
-    const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
-    v += core::velocity_change(v, *u, lag, limit);
-    p += v * dt;
-    const double speed = v.norm();
-    travelled += speed * dt;
-    since_check += dt;
-    const double now = t + dt;
-    const bool braking = now >= hold_end - 1e-12;
-    // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
-    // is well inside the margin), so the rest is one check in closed form.
-    const bool stopped = braking && speed < 5e-3;
-    if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
-    travelled = since_check = 0.0;
-    if (!free_.disk_free(p, keep)) return verdict;  // leaves known-free space: neither
-    // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
-    // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and no nearer
-    // than what min_distance holds already. True when a point came closer than the clearance (now or earlier); with
-    // `stop_early`, the groups after that one are not looked at.
-    const auto near_moving = [&](auto&& distance, bool stop_early) {
-      for (const Group& g : groups_) {
-        const double bound = distance(g.center, g.velocity) - g.radius;
-        if (bound >= keep && bound >= verdict.min_distance) continue;
-        for (std::size_t i = g.first; i < g.last; ++i) {
-          const double d = distance(moving_[i].position, g.velocity);
-          verdict.min_distance = std::min(verdict.min_distance, d);
-          if (d < keep) too_near = true;
-        }
-        if (too_near && stop_early) return true;
+  // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
+  // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
+  // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
+  // the clearance (now or earlier); with `stop_early`, the groups after that one are not looked at.
+  const auto near_moving = [&](auto&& distance, bool stop_early) {
+    for (const Group& g : groups_) {
+      const double bound = distance(g.center, g.velocity) - g.radius;
+      if (bound >= keep && (!distances || bound >= verdict.min_distance)) continue;
+      for (std::size_t i = g.first; i < g.last; ++i) {
+        const double d = distance(moving_[i].position, g.velocity);
+        verdict.min_distance = std::min(verdict.min_distance, d);
+        if (d < keep) too_near = true;
       }
-      return too_near;
-    };
-    if (stopped) {
+      if (too_near && stop_early) return true;
+    }
+    return too_near;
+  };
+  // Stopped at p from `now`: at rest until moving_horizon, clear of every moving point's straight path through
+  // then (a stop in an oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon
+  // away).
+  const auto near_at_rest = [&](const Checkpoint& c, bool stop_early) {
+    const double t0 = c.now, t1 = std::max(c.now, settings_.moving_horizon);
+    return near_moving(
+        [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - c.p, w, t0, t1); },
+        stop_early);
+  };
+  // Moving at p at `now`: clear of each moving point's prediction then (through moving_horizon).
+  const auto near_now = [&](const Checkpoint& c, bool stop_early) {
+    return c.now <= settings_.moving_horizon + 1e-12 &&
+           near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); },
+                       stop_early);
+  };
+  // Passive safety: clear of wherever a moving point could be had it turned by up to 90 degrees (a half disk
+  // ahead of it) or reversed (a segment behind it) at its reach speed.
+  const auto near_reach = [&](const Checkpoint& c) {
+    for (const Group& g : groups_) {
+      const double r = g.reach * c.now, speed_of = g.velocity.norm();
+      if (r <= 0.0) continue;
+      if ((c.p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach
+      // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
+      const Eigen::Vector2d ahead = speed_of > 0.0 ? Eigen::Vector2d(g.velocity / speed_of) : Eigen::Vector2d::Zero();
+      // The distance to a translated shape moves by at most the translation: the shape at the group's centre,
+      // less its radius, bounds every point's distance from below (the same verdict, fewer square roots).
+      if (passive_distance(c.p - g.center, ahead, r) - g.radius >= keep) continue;
+      for (std::size_t i = g.first; i < g.last; ++i)
+        if (passive_distance(c.p - moving_[i].position, ahead, r) < keep) return true;
+    }
+    return false;
+  };
+
+  if (!to_the_end && !distances) {
+    // Only the verdict counts: every checkpoint must hold, in any order. From the stop backwards, because
+    // most manoeuvres that fail do so late (the moving points' reach grows with time, and braking runs into
+    // things): found after a few checks rather than after all those on the way.
+    if (checkpoints_.empty() || !checkpoints_.back().stopped) return verdict;  // still moving at the horizon
+    for (auto c = checkpoints_.rbegin(); c != checkpoints_.rend(); ++c) {
+      if (!free_.disk_free(c->p, keep)) return verdict;
+      if (c->stopped ? near_at_rest(*c, true) : near_now(*c, true) || (c->passive && near_reach(*c))) return verdict;
+    }
+    verdict.in_free_space = verdict.certified = true;
+    return verdict;
+  }
+  for (const Checkpoint& c : checkpoints_) {
+    if (!free_.disk_free(c.p, keep)) return verdict;  // leaves known-free space: neither
+    if (c.stopped) {
       verdict.in_free_space = true;
-      // At rest until moving_horizon: clear of every moving point's straight path through then (a stop in an
-      // oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon away).
-      const double t0 = now, t1 = std::max(now, settings_.moving_horizon);
-      near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - p, w, t0, t1); },
-                  false);
+      near_at_rest(c, false);
+      if (verdict.min_distance <= give_up_at) return Verdict{false, false, verdict.min_distance};
       verdict.certified = !too_near;
       return verdict;
     }
-    if (now <= settings_.moving_horizon + 1e-12 &&
-        near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (p - (q + w * now)).norm(); },
-                    !to_the_end) &&
-        !to_the_end)
-      return verdict;
-    // Passive safety: while the robot moves, clear of wherever a moving point could be had it turned by up to
-    // 90 degrees (a half disk ahead of it) or reversed (a segment behind it) at its reach speed. (Stopped here
-    // once under 5 cm/s: what is left to travel, under 5 cm/s * (tau + step), is negligible against the reach,
-    // which would otherwise keep growing through the lag's exponential tail.)
-    if (!too_near && !(braking && speed < 0.05))
-      for (const Group& g : groups_) {
-        const double r = g.reach * now, speed_of = g.velocity.norm();
-        if (r <= 0.0) continue;
-        if ((p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach
-        // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
-        const Eigen::Vector2d ahead = speed_of > 0.0 ? Eigen::Vector2d(g.velocity / speed_of) : Eigen::Vector2d::Zero();
-        for (std::size_t i = g.first; i < g.last; ++i) {
-          const Eigen::Vector2d q = p - moving_[i].position;
-          const double a = q.dot(ahead), side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
-          double distance;
-          if (a >= 0.0 || speed_of <= 0.0) {
-            distance = q.norm() - r;
-          } else {
-            const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);
-            distance = std::sqrt(std::min(a * a + across * across, behind * behind + side * side));  // half disk, segment
-          }
-          if (distance < keep) {
-            too_near = true;
-            break;
-          }
-        }
-        if (too_near) {
-          if (!to_the_end) return verdict;
-          break;
-        }
-      }
+    if (near_now(c, !to_the_end) && !to_the_end) return verdict;
+    if (verdict.min_distance <= give_up_at) return Verdict{false, false, verdict.min_distance};
+    if (!too_near && c.passive && near_reach(c)) {
+      too_near = true;
+      if (!to_the_end) return verdict;
+    }
   }
   return verdict;  // still moving at the horizon
 }

@@ -174,7 +174,10 @@ class Shielded final : public Planner {
           clearance == certifier_.clearance() ? still : certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
       if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
       for (const Candidate& c : candidates_) {
-        const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance);
+        // A manoeuvre that comes as near as effort.below(gap) cannot be chosen: its check stops there.
+        const double give_up_at = effort.below(c.gap);
+        if (give_up_at == INFINITY) continue;  // the best so far is clear of every moving point and nearer the wish
+        const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance, give_up_at);
         if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
       }
       if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
@@ -209,8 +212,13 @@ class Shielded final : public Planner {
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
     double distance = -INFINITY, gap = INFINITY, hold = 0.0;
     bool found = false;
+    /// The distance at or below which a manoeuvre `g` from the wish loses to the choice so far (offer's rule).
+    double below(double g) const {
+      if (!found) return -INFINITY;
+      return g < gap ? std::nextafter(distance - 1e-9, -INFINITY) : distance + 1e-9;
+    }
     void offer(const Eigen::Vector2d& c, double d, double g, double h) {
-      if (found && !(d > distance + 1e-9 || (d >= distance - 1e-9 && g < gap))) return;
+      if (found && !(d > below(g))) return;
       command = c;
       distance = d;
       gap = g;
