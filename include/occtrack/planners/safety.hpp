@@ -181,6 +181,7 @@ class Certifier {
     double reach = 0.0;              // m/s at which they may turn or reverse (0: Settings::moving_may_turn off)
   };
   std::vector<Group> groups_;
+  mutable std::vector<const Group*> near_groups_;  // follow()'s scratch: the groups one manoeuvre could meet
   double clearance_ = 0.0;
 };
 
@@ -226,6 +227,8 @@ class MotionEvidence {
   const Frame* older_than(double age) const;
 
   Options options_;
+  std::vector<Eigen::Vector2d> directions_;  // unit vector of each beam (of the last scan's geometry)
+  double directions_angle_min_ = NAN, directions_increment_ = NAN;
   Frame current_;
   std::vector<Frame> history_;  // ring, oldest overwritten; time -infinity: an empty slot
   std::size_t next_ = 0;

@@ -43,6 +43,7 @@ double pseudo_angle(const Eigen::Vector2d& v) {
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
   moving_.reserve(512);  // the safety layer's 400 tracked points: no allocation while cycles run
   groups_.reserve(512);
+  near_groups_.reserve(512);
   checkpoints_.reserve(static_cast<std::size_t>(std::ceil(settings_.horizon / settings_.step)) + 1);
 }
 
@@ -174,13 +175,37 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     }
   }
 
+  // The objects that could come near: all of them when distances are measured; else those that can come
+  // within the clearance of the circle holding every checkpoint, at their predicted positions through the
+  // manoeuvre or the horizon (whichever is later) and wherever passive safety lets them reach by its end.
+  near_groups_.clear();
+  if (distances || checkpoints_.empty()) {
+    for (const Group& g : groups_) near_groups_.push_back(&g);
+  } else {
+    Eigen::Vector2d lo = checkpoints_.front().p, hi = lo;
+    for (const Checkpoint& c : checkpoints_) {
+      lo = lo.cwiseMin(c.p);
+      hi = hi.cwiseMax(c.p);
+    }
+    const Eigen::Vector2d center = 0.5 * (lo + hi);
+    double radius = 0.0;
+    for (const Checkpoint& c : checkpoints_) radius = std::max(radius, (c.p - center).norm());
+    const double end = checkpoints_.back().now, through = std::max(end, settings_.moving_horizon);
+    for (const Group& g : groups_) {
+      const double predicted = closest_approach(g.center - center, g.velocity, 0.0, through);
+      const double reached = (g.center - center).norm() - g.reach * end;
+      if (std::min(predicted, reached) - g.radius - radius < keep) near_groups_.push_back(&g);
+    }
+  }
+
   bool too_near = false;
   // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
   // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
   // the clearance (now or earlier); with `stop_early`, the groups after that one are not looked at.
   const auto near_moving = [&](auto&& distance, bool stop_early) {
-    for (const Group& g : groups_) {
+    for (const Group* group : near_groups_) {
+      const Group& g = *group;
       const double bound = distance(g.center, g.velocity) - g.radius;
       if (bound >= keep && (!distances || bound >= verdict.min_distance)) continue;
       for (std::size_t i = g.first; i < g.last; ++i) {
@@ -210,7 +235,8 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // Passive safety: clear of wherever a moving point could be had it turned by up to 90 degrees (a half disk
   // ahead of it) or reversed (a segment behind it) at its reach speed.
   const auto near_reach = [&](const Checkpoint& c) {
-    for (const Group& g : groups_) {
+    for (const Group* group : near_groups_) {
+      const Group& g = *group;
       const double r = g.reach * c.now, speed_of = g.velocity.norm();
       if (r <= 0.0) continue;
       if ((c.p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach

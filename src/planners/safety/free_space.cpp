@@ -81,6 +81,8 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
   if (beams_ == 0 || !p.allFinite() || !(clearance >= 0.0) || !std::isfinite(clearance)) return false;
   const int sectors = full_circle_ ? beams_ : beams_ - 1;
   const double d = p.norm();
+  // Inside the circle every sector reaches (the nearest return's range): free, without the angles.
+  if (full_circle_ && d + clearance <= nearest_) return true;
   // u: the centre's bearing in sector units from beam 0, in [0, 2 pi / increment).
   double bearing = std::atan2(p.y(), p.x()) - angle_min_;
   bearing -= kTwoPi * std::floor(bearing / kTwoPi);

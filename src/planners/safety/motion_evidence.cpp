@@ -38,10 +38,21 @@ void MotionEvidence::fill(Frame& frame, const core::Scan& scan, const Eigen::Vec
   frame.robot = robot;
   frame.time = time;
   frame.returns.resize(n);
+  // The beams' directions, computed again only when the scan's geometry changes.
+  if (directions_.size() != n || directions_angle_min_ != scan.angle_min ||
+      directions_increment_ != scan.angle_increment) {
+    directions_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+      directions_[i] = std::isfinite(a) ? Eigen::Vector2d(std::cos(a), std::sin(a)) : Eigen::Vector2d::Constant(NAN);
+    }
+    directions_angle_min_ = scan.angle_min;
+    directions_increment_ = scan.angle_increment;
+  }
   for (std::size_t i = 0; i < n; ++i) {
-    const double r = scan.ranges[i], a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
-    frame.returns[i] = r > 0.0 && r <= scan.range_max && std::isfinite(r) && std::isfinite(a)
-                           ? Eigen::Vector2d(robot + r * Eigen::Vector2d(std::cos(a), std::sin(a)))
+    const double r = scan.ranges[i];
+    frame.returns[i] = r > 0.0 && r <= scan.range_max && std::isfinite(r) && directions_[i].allFinite()
+                           ? Eigen::Vector2d(robot + r * directions_[i])
                            : Eigen::Vector2d::Constant(NAN);
   }
 }
@@ -125,10 +136,28 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
     }
     // Something left: an earlier return near the object where this scan sees free space.
     const double near = radius + options_.reach * (current_.time - earlier->time) + tol;
+    const auto left = [&](const Eigen::Vector2d& r) {
+      return r.allFinite() && (r - centre).squaredNorm() <= near * near && current_.free.disk_free(r - current_.robot, tol);
+    };
+    // Over a full circle, only the beams whose bearing (from where the earlier scan was taken) comes within
+    // `near` of the centre, with a beam to spare at each end; otherwise every beam.
+    const long n = static_cast<long>(earlier->returns.size());
+    const Eigen::Vector2d towards = centre - earlier->robot;
+    const double distance = towards.norm();
+    if (earlier->full_circle && distance > near && std::isfinite(distance)) {
+      const double half = std::asin(near / distance) / earlier->increment;  // in beams
+      double u = std::atan2(towards.y(), towards.x()) - earlier->angle_min;
+      u = (u - 2.0 * M_PI * std::floor(u / (2.0 * M_PI))) / earlier->increment;
+      const long first = static_cast<long>(std::floor(u - half)) - 1, last = static_cast<long>(std::ceil(u + half)) + 1;
+      if (last - first + 1 < n) {
+        for (long k = first; k <= last; ++k)
+          if (left(earlier->returns[static_cast<std::size_t>(((k % n) + n) % n)])) return Verdict::moved;
+        if (2 * seen < count) still = false;
+        continue;
+      }
+    }
     for (const Eigen::Vector2d& r : earlier->returns)
-      if (r.allFinite() && (r - centre).squaredNorm() <= near * near &&
-          current_.free.disk_free(r - current_.robot, tol))
-        return Verdict::moved;
+      if (left(r)) return Verdict::moved;
     if (2 * seen < count) still = false;
   }
   return still ? Verdict::still : Verdict::unknown;
