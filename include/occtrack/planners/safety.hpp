@@ -172,6 +172,7 @@ class Certifier {
     bool stopped, passive;  // at rest (the last); still moving enough for passive safety
   };
   mutable std::vector<Checkpoint> checkpoints_;  // follow()'s scratch (so one Certifier serves one thread)
+  mutable double failed_at_ = INFINITY;  // when the last manoeuvre refused this cycle failed (follow()'s hint)
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
   std::vector<MovingPoint> moving_;  // sorted by velocity, then bearing: the points of one object together
   struct Group {                     // a run of neighbouring moving points sharing one velocity (of one object)

@@ -66,6 +66,7 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
                        settings_.clearance() + 0.5;
   moving_.clear();
   groups_.clear();
+  failed_at_ = INFINITY;
   const double turning = settings_.moving_may_turn && std::isfinite(moving_speed) ? std::max(0.0, moving_speed) : 0.0;
   double nearest_moving = INFINITY;
   for (const MovingPoint& m : moving) {
@@ -145,59 +146,9 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // Between two checks the robot travels at most check_spacing, and no more than this much time passes.
   const double max_gap = moving_.empty() ? 0.1 : 0.02;
 
-  // The manoeuvre, step by step, and where it is checked.
-  checkpoints_.clear();
-  {
-    const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
-    Eigen::Vector2d p = zero, v = velocity_;
-    double travelled = 0.0, since_check = 0.0;
-    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
-    for (long k = 0; k < steps; ++k) {
-      const double t = k * dt;  // the step's start; its command
-      const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
-      v += core::velocity_change(v, *u, lag, limit);
-      p += v * dt;
-      const double speed = v.norm();
-      travelled += speed * dt;
-      since_check += dt;
-      const double now = t + dt;
-      const bool braking = now >= hold_end - 1e-12;
-      // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
-      // is well inside the margin), so the rest is one check in closed form.
-      const bool stopped = braking && speed < 5e-3;
-      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
-      travelled = since_check = 0.0;
-      // Passive safety holds while the robot moves: stopped here once under 5 cm/s while braking (what is left
-      // to travel, under 5 cm/s * (tau + step), is negligible against the reach, which would otherwise keep
-      // growing through the lag's exponential tail).
-      checkpoints_.push_back({p, now, stopped, !(braking && speed < 0.05)});
-      if (stopped) break;
-    }
-  }
-
-  // The objects that could come near: all of them when distances are measured; else those that can come
-  // within the clearance of the circle holding every checkpoint, at their predicted positions through the
-  // manoeuvre or the horizon (whichever is later) and wherever passive safety lets them reach by its end.
+  const bool verdict_only = !to_the_end && !distances;
   near_groups_.clear();
-  if (distances || checkpoints_.empty()) {
-    for (const Group& g : groups_) near_groups_.push_back(&g);
-  } else {
-    Eigen::Vector2d lo = checkpoints_.front().p, hi = lo;
-    for (const Checkpoint& c : checkpoints_) {
-      lo = lo.cwiseMin(c.p);
-      hi = hi.cwiseMax(c.p);
-    }
-    const Eigen::Vector2d center = 0.5 * (lo + hi);
-    double radius = 0.0;
-    for (const Checkpoint& c : checkpoints_) radius = std::max(radius, (c.p - center).norm());
-    const double end = checkpoints_.back().now, through = std::max(end, settings_.moving_horizon);
-    for (const Group& g : groups_) {
-      const double predicted = closest_approach(g.center - center, g.velocity, 0.0, through);
-      const double reached = (g.center - center).norm() - g.reach * end;
-      if (std::min(predicted, reached) - g.radius - radius < keep) near_groups_.push_back(&g);
-    }
-  }
-
+  for (const Group& g : groups_) near_groups_.push_back(&g);
   bool too_near = false;
   // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
@@ -251,15 +202,80 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     return false;
   };
 
-  if (!to_the_end && !distances) {
-    // Only the verdict counts: every checkpoint must hold, in any order. From the stop backwards, because
-    // most manoeuvres that fail do so late (the moving points' reach grows with time, and braking runs into
-    // things): found after a few checks rather than after all those on the way.
-    if (checkpoints_.empty() || !checkpoints_.back().stopped) return verdict;  // still moving at the horizon
-    for (auto c = checkpoints_.rbegin(); c != checkpoints_.rend(); ++c) {
-      if (!free_.disk_free(c->p, keep)) return verdict;
-      if (c->stopped ? near_at_rest(*c, true) : near_now(*c, true) || (c->passive && near_reach(*c))) return verdict;
+  // Every check at a checkpoint, for a verdict alone: true when it holds.
+  const auto holds = [&](const Checkpoint& c) {
+    if (!free_.disk_free(c.p, keep)) return false;
+    return !(c.stopped ? near_at_rest(c, true) : near_now(c, true) || (c.passive && near_reach(c)));
+  };
+
+  // The manoeuvre, step by step, and where it is checked.
+  checkpoints_.clear();
+  long hinted = -1;  // the checkpoint looked at first, if any
+  {
+    const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
+    Eigen::Vector2d p = zero, v = velocity_;
+    double travelled = 0.0, since_check = 0.0;
+    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
+    for (long k = 0; k < steps; ++k) {
+      const double t = k * dt;  // the step's start; its command
+      const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
+      v += core::velocity_change(v, *u, lag, limit);
+      p += v * dt;
+      const double speed = v.norm();
+      travelled += speed * dt;
+      since_check += dt;
+      const double now = t + dt;
+      const bool braking = now >= hold_end - 1e-12;
+      // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
+      // is well inside the margin), so the rest is one check in closed form.
+      const bool stopped = braking && speed < 5e-3;
+      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
+      travelled = since_check = 0.0;
+      // Passive safety holds while the robot moves: stopped here once under 5 cm/s while braking (what is left
+      // to travel, under 5 cm/s * (tau + step), is negligible against the reach, which would otherwise keep
+      // growing through the lag's exponential tail).
+      checkpoints_.push_back({p, now, stopped, !(braking && speed < 0.05)});
+      // Only the verdict counts: the checkpoint where the last refused manoeuvre failed, looked at as soon as
+      // this one gets there. Candidates are often alike, and fail alike: the rest of the way is then spared.
+      if (verdict_only && hinted < 0 && now >= failed_at_ - 1e-12) {
+        hinted = static_cast<long>(checkpoints_.size()) - 1;
+        if (!holds(checkpoints_.back())) return verdict;
+      }
+      if (stopped) break;
     }
+  }
+
+  // The objects that could come near: all of them when distances are measured; else those that can come
+  // within the clearance of the circle holding every checkpoint, at their predicted positions through the
+  // manoeuvre or the horizon (whichever is later) and wherever passive safety lets them reach by its end.
+  if (verdict_only && !checkpoints_.empty()) {
+    near_groups_.clear();
+    Eigen::Vector2d lo = checkpoints_.front().p, hi = lo;
+    for (const Checkpoint& c : checkpoints_) {
+      lo = lo.cwiseMin(c.p);
+      hi = hi.cwiseMax(c.p);
+    }
+    const Eigen::Vector2d center = 0.5 * (lo + hi);
+    double radius = 0.0;
+    for (const Checkpoint& c : checkpoints_) radius = std::max(radius, (c.p - center).norm());
+    const double end = checkpoints_.back().now, through = std::max(end, settings_.moving_horizon);
+    for (const Group& g : groups_) {
+      const double predicted = closest_approach(g.center - center, g.velocity, 0.0, through);
+      const double reached = (g.center - center).norm() - g.reach * end;
+      if (std::min(predicted, reached) - g.radius - radius < keep) near_groups_.push_back(&g);
+    }
+  }
+
+  if (verdict_only) {
+    // Every checkpoint must hold, in any order. From the stop backwards, because most manoeuvres that fail do
+    // so late (the moving points' reach grows with time, and braking runs into things): found after a few
+    // checks rather than after all those on the way.
+    if (checkpoints_.empty() || !checkpoints_.back().stopped) return verdict;  // still moving at the horizon
+    for (long i = static_cast<long>(checkpoints_.size()) - 1; i >= 0; --i)
+      if (i != hinted && !holds(checkpoints_[static_cast<std::size_t>(i)])) {
+        failed_at_ = checkpoints_[static_cast<std::size_t>(i)].now;
+        return verdict;
+      }
     verdict.in_free_space = verdict.certified = true;
     return verdict;
   }

@@ -108,6 +108,11 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
   }
   // Fast: every sector the disk crosses reaches beyond the disk's farthest point.
   if (window_min(lo, hi) >= d + clearance) return true;
+  // Fast the other way: the disk's farthest point, on the centre's own bearing, lies beyond its sector (what
+  // exact() would find there first, without the angles).
+  long own = static_cast<long>(std::floor(u)) % sectors;
+  if (own < 0) own += sectors;
+  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return false;
   return exact(p, d, clearance, u, half_width);
 }
 
