@@ -137,8 +137,9 @@ class Shielded final : public Planner {
     const Settings& s = certifier_.settings();
     const Eigen::Vector2d wish = out.ok && planned.allFinite() ? planned : Eigen::Vector2d::Zero();
     const double interval = certifier_.hold();
-    const Certifier::Verdict still = certifier_.check(Eigen::Vector2d::Zero(), interval, true);
-    if (still.certified && wish.norm() < 1e-6) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+    // The stop's verdict alone here; its whole story (check) only if the best effort below needs it.
+    const bool stop_certified = certifier_.certify(Eigen::Vector2d::Zero());
+    if (stop_certified && wish.norm() < 1e-6) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
     // The evasive manoeuvres nearest the wish first (then the shorter hold): the first certified one is the
     // choice, so that a cycle certifies only as many as it must.
     candidates_.clear();
@@ -153,14 +154,14 @@ class Shielded final : public Planner {
       return a.gap < b.gap || (a.gap == b.gap && a.hold < b.hold);
     });
     for (const Candidate& c : candidates_) {
-      if (still.certified && c.gap >= wish.norm() - 1e-9) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+      if (stop_certified && c.gap >= wish.norm() - 1e-9) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
       if (!certifier_.certify_held(c.command, c.hold)) continue;
       evasive_ = c.command;
       send(out, c.command, SafetyAction::evasive);
       evasive_left_ = std::max(c.hold, interval);
       return;
     }
-    if (still.certified) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
+    if (stop_certified) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
     if (evasive_left_ > interval + 1e-9 && certifier_.certify_held(evasive_, evasive_left_ - interval)) {
       evasive_left_ -= interval;
       return send(out, evasive_, SafetyAction::evasive);
@@ -170,8 +171,7 @@ class Shielded final : public Planner {
     // where thousands of manoeuvres were clear; docs/safety.md).
     for (const double clearance : {certifier_.clearance(), std::min(certifier_.clearance(), s.robot_radius)}) {
       Choice effort;  // farthest from the moving points' predictions, then nearest the wish
-      const Certifier::Verdict rest =
-          clearance == certifier_.clearance() ? still : certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
+      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
       if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
       for (const Candidate& c : candidates_) {
         // A manoeuvre that comes as near as effort.below(gap) cannot be chosen: its check stops there.
