@@ -1,12 +1,14 @@
 // occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
-//                       [--repeats R] [--scenario FILE] [--seed S] [--shield] [--json FILE]
+//                       [--repeats R] [--scenario FILE] [--seed S] [--shield] [--predictor] [--json FILE]
 //
 // Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
 // projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
 // (default scenarios/static-1ms/forest-a-1.yaml) and the scans it sees are replayed. Prints the median, p99
 // and mean in milliseconds and the median split per stage. --random times a model with random weights, so
 // that the cost can be measured before a model is trained. --shield puts the safety layer around the policy
-// (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle.
+// (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle, and by
+// what the layer chose. --predictor ranks against the target predictor (its cost: the difference in the cycle
+// against a run without it).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -41,6 +43,7 @@ struct Options {
   bool keep_last_plan = true;
   bool rank_stop = true;
   bool shield = false;
+  bool predictor = false;
   int iterations = 50;
   int repeats = 1000;
   double seconds = 5.0;
@@ -108,6 +111,7 @@ int run(const Options& o) {
   settings.rank_stop = o.rank_stop;
   settings.seed = o.seed;
   settings.projection.iterations = o.iterations;
+  settings.ranking.predict_target = o.predictor;
   const std::string scenario_path = resolve_scenario(o.scenario);
   const core::Scenario scenario = io::read_scenario(scenario_path);
 
@@ -179,9 +183,10 @@ int run(const Options& o) {
   const bool projects = settings.variant != policy::Variant::bc;
   const int rows = o.batch + (o.keep_last_plan ? 1 : 0) + (o.rank_stop && projects ? 1 : 0);
   std::printf("policy %s (%s model), batch %d (%d rows ranked%s%s), %d projection iterations, %d obstacle points, "
-              "one core\n",
+              "one core%s\n",
               policy->name().c_str(), model_name.c_str(), o.batch, rows, o.keep_last_plan ? ", last plan" : "",
-              o.rank_stop && projects ? ", stop plan" : "", o.iterations, settings.projection.obstacles);
+              o.rank_stop && projects ? ", stop plan" : "", o.iterations, settings.projection.obstacles,
+              o.predictor ? ", target predictor" : "");
   std::printf("  network: PointNet widths ");
   for (std::size_t i = 0; i < net.pointnet_widths.size(); ++i)
     std::printf("%s%d", i ? "-" : "", net.pointnet_widths[i]);
@@ -209,6 +214,7 @@ int run(const Options& o) {
         {"benchmark", "policy"},
         {"planner", policy->name()},
         {"shield", o.shield},
+        {"predictor", o.predictor},
         {"model", model_name},
         {"batch", o.batch},
         {"rows", rows},
@@ -254,6 +260,8 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
   cmd->add_option("--seed", o->seed, "Seed of the latent samples (and of the random weights)")->capture_default_str();
   cmd->add_flag("--shield", o->shield,
                 "Put the safety layer around the policy (response time 0.25 s) and time its share of the cycle");
+  cmd->add_flag("--predictor", o->predictor,
+                "Rank against the target predictor (docs/target_prediction.md) instead of constant velocity");
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
