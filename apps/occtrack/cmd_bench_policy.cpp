@@ -148,11 +148,8 @@ int run(const Options& o) {
   std::vector<double> total, cpu, perception, pointnet, decoder, projection, ranking, safety;
   for (auto* v : {&total, &cpu, &perception, &pointnet, &decoder, &projection, &ranking, &safety})
     v->reserve(o.repeats);
-  // The layer's time by what it chose (planners::SafetyAction, in declaration order): the fallback's search is
-  // what makes the tail.
-  constexpr const char* kActions[] = {"off", "plan", "alternative", "stop", "evasive", "best_effort", "brake"};
-  constexpr int kActionCount = static_cast<int>(sizeof(kActions) / sizeof(kActions[0]));
-  std::vector<std::vector<double>> by_action(kActionCount);
+  // The layer's time by what it chose (indexed by planners::SafetyAction): the fallback's search makes the tail.
+  std::vector<std::vector<double>> by_action(planners::kSafetyActions);
   int failed = 0;
   for (int r = 0; r < o.repeats; ++r) {
     const int i = r % frames;
@@ -165,8 +162,7 @@ int run(const Options& o) {
     if (!out.ok) ++failed;
     const auto& t = policy->last_timing();
     safety.push_back(o.shield ? out.compute_ms - t.total : 0.0);  // the layer's part of the cycle
-    const int action = static_cast<int>(out.safety);
-    if (o.shield && action >= 0 && action < kActionCount) by_action[action].push_back(safety.back());
+    if (o.shield) by_action[static_cast<std::size_t>(out.safety)].push_back(safety.back());
     perception.push_back(t.perception);
     pointnet.push_back(t.pointnet);
     decoder.push_back(t.decoder);
@@ -201,10 +197,12 @@ int run(const Options& o) {
   if (o.shield) {
     std::printf("  safety layer: median %.3f ms, p99 %.3f ms, max %.3f ms of the cycle\n", ss.median, ss.p99, ss.max);
     std::printf("  by its choice (cycles: median / max ms):");
-    for (int a = 1; a < kActionCount; ++a) {
-      if (by_action[a].empty()) continue;
-      const core::TimingSummary s = core::summarize_timings(by_action[a]);
-      std::printf(" %s %zu: %.3f / %.3f;", kActions[a], by_action[a].size(), s.median, s.max);
+    for (int a = 0; a < planners::kSafetyActions; ++a) {
+      const std::vector<double>& times = by_action[static_cast<std::size_t>(a)];
+      if (times.empty()) continue;
+      const core::TimingSummary s = core::summarize_timings(times);
+      std::printf(" %s %zu: %.3f / %.3f;", planners::to_string(static_cast<planners::SafetyAction>(a)), times.size(),
+                  s.median, s.max);
     }
     std::printf("\n");
   }

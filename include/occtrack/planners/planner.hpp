@@ -42,6 +42,20 @@ enum class SafetyAction {
                 ///< radius) farthest from moving obstacles' paths
   brake,        ///< nothing could be certified, nor stays in known-free space: full brake (command zero)
 };
+constexpr int kSafetyActions = 7;  ///< how many SafetyAction values there are
+/// The action's name as the result files spell it ("plan", "best_effort", ...; "off").
+constexpr const char* to_string(SafetyAction action) {
+  switch (action) {
+    case SafetyAction::off: return "off";
+    case SafetyAction::plan: return "plan";
+    case SafetyAction::alternative: return "alternative";
+    case SafetyAction::stop: return "stop";
+    case SafetyAction::evasive: return "evasive";
+    case SafetyAction::best_effort: return "best_effort";
+    case SafetyAction::brake: return "brake";
+  }
+  return "unknown";
+}
 
 struct PlannerOutput {
   Vec2 command_velocity = Vec2::Zero();  ///< world frame; always finite

@@ -140,24 +140,21 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
       return r.allFinite() && (r - centre).squaredNorm() <= near * near && current_.free.disk_free(r - current_.robot, tol);
     };
     // Over a full circle, only the beams whose bearing (from where the earlier scan was taken) comes within
-    // `near` of the centre, with a beam to spare at each end; otherwise every beam.
+    // `near` of the centre, with a beam to spare at each end (less than half a turn either side of a bearing
+    // in [0, n), so one turn wraps them); otherwise every beam.
     const long n = static_cast<long>(earlier->returns.size());
+    long first = 0, last = n - 1;
     const Eigen::Vector2d towards = centre - earlier->robot;
     const double distance = towards.norm();
     if (earlier->full_circle && distance > near && std::isfinite(distance)) {
       const double half = std::asin(near / distance) / earlier->increment;  // in beams
       double u = std::atan2(towards.y(), towards.x()) - earlier->angle_min;
       u = (u - 2.0 * M_PI * std::floor(u / (2.0 * M_PI))) / earlier->increment;
-      const long first = static_cast<long>(std::floor(u - half)) - 1, last = static_cast<long>(std::ceil(u + half)) + 1;
-      if (last - first + 1 < n) {
-        for (long k = first; k <= last; ++k)
-          if (left(earlier->returns[static_cast<std::size_t>(((k % n) + n) % n)])) return Verdict::moved;
-        if (2 * seen < count) still = false;
-        continue;
-      }
+      const long lo = static_cast<long>(std::floor(u - half)) - 1, hi = static_cast<long>(std::ceil(u + half)) + 1;
+      if (hi - lo + 1 < n) first = lo, last = hi;
     }
-    for (const Eigen::Vector2d& r : earlier->returns)
-      if (left(r)) return Verdict::moved;
+    for (long k = first; k <= last; ++k)
+      if (left(earlier->returns[static_cast<std::size_t>(k < 0 ? k + n : (k >= n ? k - n : k))])) return Verdict::moved;
     if (2 * seen < count) still = false;
   }
   return still ? Verdict::still : Verdict::unknown;
