@@ -13,7 +13,7 @@
 #   CHUNKS          dataset files of 16 episodes each [8]; one that exists is kept, not made again
 #   DATA_MINUTES    start no new chunk after this many minutes (0: no limit) [0]
 #   DURATION        simulated seconds per episode [30]
-#   EXPERT_SAMPLES, EXPERT_ITERATIONS   the expert's CEM budget [800, 3]
+#   EXPERT_SAMPLES, EXPERT_ITERATIONS   the expert's CEM budget [the offline expert's: 120, 8]
 #   JOBS            labelling threads [all cores]
 #   STEPS, BATCH, ITERATIONS, LR, LR_FINAL   training [6000, 512, 20, 1e-3, 1e-4]
 #   BC_STEPS        steps of bc, which has no projection and is far cheaper per step [4 x STEPS]
@@ -53,7 +53,7 @@ for (( i = 0; i < chunks; i++ )); do
   fi
   "$occtrack" dataset generate --out "$out.partial" --episodes 16 --seed $(( 7000 + 16 * i )) \
     --duration "${DURATION:-30}" --label-every 2 --driver projcem --jobs "$jobs" \
-    --expert-samples "${EXPERT_SAMPLES:-800}" --expert-iterations "${EXPERT_ITERATIONS:-3}"
+    ${EXPERT_SAMPLES:+--expert-samples "$EXPERT_SAMPLES"} ${EXPERT_ITERATIONS:+--expert-iterations "$EXPERT_ITERATIONS"}
   mv "$out.partial" "$out"
 done
 files=()

@@ -93,6 +93,7 @@ TEST(PlannerSettings, ProjCemNamesEveryBrokenField) {
       {"elite_fraction", [](P& p) { p.elite_fraction = 0.0; }},
       {"initial_std", [](P& p) { p.initial_std = -1.0; }},
       {"min_std", [](P& p) { p.min_std = kNaN; }},
+      {"settle_distance", [](P& p) { p.settle_distance = -0.1; }},
       {"candidates_kept", [](P& p) { p.candidates_kept = -1; }},
       {"projection.horizon", [](P& p) { p.projection.horizon = kNaN; }},
       {"projection.iterations", [](P& p) { p.projection.iterations = 0; }},

@@ -1,7 +1,7 @@
 // occtrack dataset generate --out FILE [--episodes 8] [--seed 5000] [--duration 40]
 //                           [--worlds forest,boxes,mixed,dynamic] [--speeds 1,1.5,2] [--label-every 1]
 //                           [--driver expert|projcem|NAME] [--model FILE] [--jobs J]
-//                           [--expert-samples 2000] [--expert-iterations 4]
+//                           [--expert-samples 120] [--expert-iterations 8] [--expert-settle 0]
 // occtrack dataset info FILE
 // occtrack dataset merge --out FILE IN IN...
 //
@@ -37,8 +37,10 @@ struct GenerateOptions {
   std::string driver = "expert";
   std::string model;
   int jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  int expert_samples = 2000;
-  int expert_iterations = 4;
+  // The offline expert's preset (planners::ProjCemSettings::offline_expert), overridable.
+  int expert_samples = planners::ProjCemSettings::offline_expert(1).samples;
+  int expert_iterations = planners::ProjCemSettings::offline_expert(1).cem_iterations;
+  double expert_settle = planners::ProjCemSettings::offline_expert(1).settle_distance;
 };
 
 struct MergeOptions {
@@ -73,7 +75,7 @@ std::string canonical_command(const GenerateOptions& o) {
                      std::to_string(o.label_every) + " --driver " + o.driver;
   if (!o.model.empty()) text += " --model " + o.model;
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
-          std::to_string(o.expert_iterations);
+          std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
   return text;
 }
 
@@ -83,7 +85,7 @@ std::string option_of(const std::string& message) {
       {"episodes", "--episodes"},     {"first_seed", "--seed"},          {"worlds", "--worlds"},
       {"target_speeds", "--speeds"},  {"duration", "--duration"},        {"label_every", "--label-every"},
       {"driver", "--driver"},         {"jobs", "--jobs"},                {"expert.samples", "--expert-samples"},
-      {"expert.cem_iterations", "--expert-iterations"}};
+      {"expert.cem_iterations", "--expert-iterations"}, {"expert.settle_distance", "--expert-settle"}};
   for (const auto& [field, option] : fields)
     if (message.rfind(field, 0) == 0) return std::string(option) + ": ";
   return "";
@@ -123,6 +125,7 @@ int generate(const GenerateOptions& o) {
   s.expert = planners::ProjCemSettings::offline_expert(1);
   s.expert.samples = o.expert_samples;
   s.expert.cem_iterations = o.expert_iterations;
+  s.expert.settle_distance = o.expert_settle;
   s.created_by = created_by(canonical_command(o));
   std::string error;
   if (!s.validate(&error)) {
@@ -195,6 +198,9 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
       ->capture_default_str();
   gen->add_option("--expert-samples", o->expert_samples, "Expert's samples per CEM iteration")->capture_default_str();
   gen->add_option("--expert-iterations", o->expert_iterations, "Expert's CEM iterations")->capture_default_str();
+  gen->add_option("--expert-settle", o->expert_settle,
+                  "Expert: stop iterating once a refit moves the plan's mean by less than this (m; 0: never)")
+      ->capture_default_str();
   set_command_body(gen, exit_code, [o] { return generate(*o); });
 }
 

@@ -13,8 +13,8 @@ namespace occtrack::planners {
 
 ProjCemSettings ProjCemSettings::offline_expert(int threads) {
   ProjCemSettings s;
-  s.samples = 2000;
-  s.cem_iterations = 4;
+  s.samples = 120;
+  s.cem_iterations = 8;
   s.projection.iterations = 50;
   s.projection.threads = std::max(1, threads);
   return s;
@@ -39,6 +39,7 @@ bool ProjCemSettings::validate(std::string* error) const {
             "elite_fraction must lie in (0, 1], got ", elite_fraction);
   c.non_negative(initial_std, "initial_std");
   c.non_negative(min_std, "min_std");
+  c.non_negative(settle_distance, "settle_distance");
   c.require(candidates_kept >= 0, "candidates_kept (", candidates_kept, ") must not be negative");
   return c.done(error) && detail::validate_cycle(batch_settings(*this), &perception, ranking, response_time, error);
 }
@@ -141,8 +142,10 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
     s.variance.setZero();
     for (int e = 0; e < elites; ++e)
       s.variance += (s.optimizer.result.xi.row(s.order[e]).cast<double>() - s.elite_mean).array().square().matrix();
+    const double moved = (s.elite_mean - s.mean).cwiseAbs().maxCoeff();
     s.mean = s.elite_mean;
     s.stddev = (s.variance / elites).array().sqrt().max(cfg.min_std).matrix();
+    if (moved < cfg.settle_distance) break;  // the distribution has settled: later iterations would resample it
   }
 
   if (!std::isfinite(best_cost)) return detail::brake(out, s.record, clock, "no finite candidate");

@@ -99,19 +99,8 @@ bool DemonstrationSettings::validate(std::string* error) const {
     why << "driver must be \"expert\" or a planner name";
   } else if (jobs < 1 || jobs > 4096) {
     why << "jobs (" << jobs << ") must be between 1 and 4096";
-  } else if (expert.samples < 4) {
-    why << "expert.samples (" << expert.samples << ") must be at least 4";
-  } else if (expert.cem_iterations < 1) {
-    why << "expert.cem_iterations (" << expert.cem_iterations << ") must be at least 1";
-  } else if (!(expert.elite_fraction > 0.0 && expert.elite_fraction <= 1.0)) {
-    why << "expert.elite_fraction (" << expert.elite_fraction << ") must be in (0, 1]";
-  } else if (!expert.projection.validate(&inner)) {
-    why << "expert.projection." << inner;
-  } else if (!expert.perception.validate(&inner)) {
-    why << "expert.perception." << inner;
-  } else if (expert.perception.nearest_count != expert.projection.obstacles) {
-    why << "expert.perception.nearest_count (" << expert.perception.nearest_count
-        << ") must equal expert.projection.obstacles (" << expert.projection.obstacles << ")";
+  } else if (!expert.validate(&inner)) {
+    why << "expert." << inner;
   } else if (!episode.validate(&inner)) {
     why << "episode." << inner;
   } else if (!(duration >= episode.planning_period)) {
@@ -158,6 +147,7 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                     {"elite_fraction", s.expert.elite_fraction},
                     {"initial_std", s.expert.initial_std},
                     {"min_std", s.expert.min_std},
+                    {"settle_distance", s.expert.settle_distance},
                     {"ranking",
                      {{"occlusion_weight", s.expert.ranking.occlusion_weight},
                       {"tracking_weight", s.expert.ranking.tracking_weight},
