@@ -107,6 +107,29 @@ TEST(ModelFile, WriterAndReaderAreInverses) {
   EXPECT_EQ(io::validate_model_file(rewritten).projection, no_rho.projection);
 }
 
+TEST(ModelFile, TheNetworkFrameIsRecordedAndOlderFilesAreRobotFrame) {
+  const projection::Settings p;
+  io::NetworkConfig config = io::NetworkConfig::for_projection(p);
+  config.target_frame = true;
+  io::TensorFile file = policy::random_model(config, p, "cvae", 6);
+  EXPECT_EQ(nlohmann::json::parse(file.meta("network")).at("frame"), "target");
+  EXPECT_TRUE(io::validate_model_file(file).network.target_frame);
+  // Files written before issue 12 have no "frame": the robot frame, as they were trained.
+  nlohmann::json network = nlohmann::json::parse(file.meta("network"));
+  network.erase("frame");
+  file.metadata["network"] = network.dump();
+  EXPECT_FALSE(io::validate_model_file(file).network.target_frame);
+  network["frame"] = "world";
+  file.metadata["network"] = network.dump();
+  file.source = "m.safetensors";
+  try {
+    io::validate_model_file(file);
+    FAIL() << "accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("network.frame"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ModelFile, VariantSpellings) {
   for (const io::Variant v : {io::Variant::cvae, io::Variant::bc, io::Variant::fixed_q})
     EXPECT_EQ(io::parse_variant(io::to_string(v)), v);

@@ -363,6 +363,70 @@ TEST(PolicyModel, FoldedInferenceMatchesTheNaiveLoopAtTheDefaultSizes) {
   expect_matches_naive(file, 37, 5);
 }
 
+// A target-frame model sees the same inputs whichever way the scene is turned about the robot, so its outputs
+// turn with the scene: positions, velocities and coefficient pairs turn, the distance bounds do not.
+TEST(PolicyModel, ATargetFrameModelTurnsWithTheScene) {
+  policy::NetworkConfig config = small_network();
+  config.target_frame = true;
+  io::TensorFile file = policy::random_model(config, small_projection(), "cvae", 31);
+  randomise_normalisation(file, 32);
+  policy::Model model{file};
+  policy::FrameRotation turn(model.network());
+  ASSERT_TRUE(turn.turns());
+  std::mt19937_64 rng(33);
+  std::normal_distribution<float> normal(0.0f, 2.0f);
+  const int B = 5, C = 17;
+  Eigen::VectorXf observation(6);
+  for (int i = 0; i < 6; ++i) observation(i) = normal(rng);
+  policy::Cloud cloud(C, 2);
+  for (int i = 0; i < C; ++i) cloud.row(i) << normal(rng), normal(rng);
+  policy::Rows z(B, config.latent);
+  for (int b = 0; b < B; ++b)
+    for (int j = 0; j < config.latent; ++j) z(b, j) = normal(rng);
+  auto outputs = [&](Eigen::VectorXf o, policy::Cloud c) {
+    turn.aim(o(2), o(3));
+    turn.into_network(o, c);
+    Eigen::VectorXf features(config.features);
+    model.features(c, features);
+    policy::Rows y(B, config.outputs);
+    model.decode(z, o, features, y);
+    turn.out_of_network(y);
+    return y;
+  };
+  const policy::Rows straight = outputs(observation, cloud);
+  const float angle = 2.3f, c = std::cos(angle), s = std::sin(angle);
+  auto turned = [&](float x, float y) { return Eigen::Vector2f(c * x - s * y, s * x + c * y); };
+  Eigen::VectorXf turned_observation(6);
+  for (int k = 0; k < 3; ++k) turned_observation.segment<2>(2 * k) = turned(observation(2 * k), observation(2 * k + 1));
+  policy::Cloud turned_cloud(C, 2);
+  for (int i = 0; i < C; ++i) turned_cloud.row(i) = turned(cloud(i, 0), cloud(i, 1)).transpose();
+  const policy::Rows after = outputs(turned_observation, turned_cloud);
+
+  policy::Rows expected = straight;
+  const auto pairs = model.layout().turning_pairs();
+  ASSERT_EQ(pairs.size(), std::size_t(4 + 2 * config.coefficients));
+  for (int b = 0; b < B; ++b)
+    for (const auto& [ix, iy] : pairs) {
+      const Eigen::Vector2f v = turned(straight(b, ix), straight(b, iy));
+      expected(b, ix) = v.x();
+      expected(b, iy) = v.y();
+    }
+  const double scale = 1.0 + straight.cwiseAbs().maxCoeff();
+  EXPECT_LT((after - expected).cwiseAbs().maxCoeff() / scale, 1e-4);
+  // Not by accident: the outputs do change with the turn.
+  EXPECT_GT((after - straight).cwiseAbs().maxCoeff() / scale, 1e-2);
+
+  // A robot-frame model's turn is the identity.
+  policy::FrameRotation none(small_network());
+  none.aim(1.0, 2.0);
+  EXPECT_FALSE(none.turns());
+  Eigen::VectorXf o = observation;
+  policy::Cloud cl = cloud;
+  none.into_network(o, cl);
+  EXPECT_EQ(o, observation);
+  EXPECT_EQ(cl, cloud);
+}
+
 TEST(PolicyModel, HandCheckedOneUnitNetwork) {
   // Every width 1, identity-like weights: the result can be followed by hand.
   projection::Settings p = small_projection();

@@ -175,7 +175,8 @@ std::string NetworkConfig::to_json() const {
                   {"features", features},           {"hidden", hidden},
                   {"layers", layers},               {"outputs", outputs},
                   {"coefficients", coefficients},   {"steps", steps},
-                  {"batch_norm_eps", batch_norm_eps}};
+                  {"batch_norm_eps", batch_norm_eps},
+                  {"frame", target_frame ? "target" : "robot"}};
   return j.dump();
 }
 
@@ -201,6 +202,12 @@ NetworkConfig NetworkConfig::parse(const std::string& json_text, const std::stri
   c.coefficients = r.integer(r.member(doc, p, "coefficients"), p + ".coefficients");
   c.steps = r.integer(r.member(doc, p, "steps"), p + ".steps");
   c.batch_norm_eps = r.number(r.member(doc, p, "batch_norm_eps"), p + ".batch_norm_eps");
+  if (doc.contains("frame")) {  // files before issue 12 have none: robot frame
+    const json& frame = doc["frame"];
+    if (!frame.is_string() || (frame != "robot" && frame != "target"))
+      r.fail(p + ".frame", "must be \"robot\" or \"target\"");
+    c.target_frame = frame == "target";
+  }
   std::string error;
   if (!c.validate(&error)) r.fail(p + "." + error.substr(0, error.find_first_of(" [")), error);
   return c;
@@ -215,6 +222,15 @@ OutputLayout::OutputLayout(const NetworkConfig& network) {
   distance_max = distance_min + m;
   xi_bar = distance_max + m;
   size = xi_bar + n2;
+}
+
+std::vector<std::pair<int, int>> OutputLayout::turning_pairs() const {
+  const int n = (distance_min - lambda0) / 2;
+  std::vector<std::pair<int, int>> pairs = {{terminal, terminal + 1}, {terminal + 2, terminal + 3}, {via, via + 1},
+                                            {via + 2, via + 3}};
+  for (int block : {lambda0, xi_bar})
+    for (int i = 0; i < n; ++i) pairs.emplace_back(block + i, block + n + i);
+  return pairs;
 }
 
 std::string band_json(const core::TrackingBand& band) {

@@ -127,10 +127,19 @@ NormalizationStats compute_normalization(const Dataset& data, const torch::Tenso
     return std::make_pair(mean, std.clamp_min(std_floor));
   };
   const auto f64 = torch::kFloat64;
+  // The statistics of what the networks see: for a target-frame model, the rows turned into its frame.
+  torch::Tensor observation = data.observation.index_select(0, i).to(f64);
+  torch::Tensor cloud = data.cloud.index_select(0, i).to(f64);
+  torch::Tensor xi = data.expert_xi.index_select(0, i).to(f64);
+  if (config.target_frame) {
+    const FrameTurn turn(observation);
+    cloud = turn.cloud_in(cloud);
+    xi = turn.xi_in(xi);
+    observation = turn.observation_in(observation);
+  }
   NormalizationStats s;
-  std::tie(s.observation_mean, s.observation_std) = stats(data.observation.index_select(0, i).to(f64));
-  std::tie(s.cloud_mean, s.cloud_std) = stats(data.cloud.index_select(0, i).to(f64).reshape({-1, 2}));
-  const torch::Tensor xi = data.expert_xi.index_select(0, i).to(f64);
+  std::tie(s.observation_mean, s.observation_std) = stats(observation);
+  std::tie(s.cloud_mean, s.cloud_std) = stats(cloud.reshape({-1, 2}));
   std::tie(s.xi_mean, s.xi_std) = stats(xi);
 
   // Output offsets and scales: the expert's terminal state and via points, the band, xi.

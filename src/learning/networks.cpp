@@ -158,12 +158,86 @@ torch::Tensor CvaeImpl::decode(const torch::Tensor& z, const torch::Tensor& obse
   return norm->output->forward(decoder->forward(z, norm->observation->forward(observation), features));
 }
 
+namespace {
+
+// Columns (first of each pair, second of each pair) as index tensors on `device`.
+std::pair<torch::Tensor, torch::Tensor> pair_columns(const std::vector<std::pair<int, int>>& pairs, torch::Device device) {
+  std::vector<int64_t> xs, ys;
+  for (const auto& [x, y] : pairs) {
+    xs.push_back(x);
+    ys.push_back(y);
+  }
+  const auto options = torch::TensorOptions().dtype(torch::kInt64);
+  return {torch::tensor(xs, options).to(device), torch::tensor(ys, options).to(device)};
+}
+
+// Each (x, y) column pair of t [B, D] turned by (c, s) [B, 1]: x' = c x - s y, y' = s x + c y. Out of place.
+torch::Tensor turn_pairs(const torch::Tensor& t, const std::vector<std::pair<int, int>>& pairs, const torch::Tensor& c,
+                         const torch::Tensor& s) {
+  const auto [xs, ys] = pair_columns(pairs, t.device());
+  const torch::Tensor x = t.index_select(1, xs), y = t.index_select(1, ys);
+  return t.index_copy(1, xs, c * x - s * y).index_copy(1, ys, s * x + c * y);
+}
+
+std::vector<std::pair<int, int>> observation_pairs() {
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& pair : io::kObservationPairs) pairs.emplace_back(pair[0], pair[1]);
+  return pairs;
+}
+
+std::vector<std::pair<int, int>> xi_pairs(int64_t n) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < n; ++i) pairs.emplace_back(i, static_cast<int>(n) + i);
+  return pairs;
+}
+
+}  // namespace
+
+FrameTurn::FrameTurn(const torch::Tensor& observation) {
+  const torch::Tensor x = observation.index({Slice(), Slice(2, 3)}), y = observation.index({Slice(), Slice(3, 4)});
+  const torch::Tensor r = torch::sqrt(x * x + y * y);
+  const torch::Tensor on_robot = r <= 0;
+  const torch::Tensor safe = torch::where(on_robot, torch::ones_like(r), r);
+  cos = torch::where(on_robot, torch::ones_like(r), x / safe);
+  sin = torch::where(on_robot, torch::zeros_like(r), y / safe);
+}
+
+torch::Tensor FrameTurn::observation_in(const torch::Tensor& observation) const {
+  return turn_pairs(observation, observation_pairs(), cos, -sin);
+}
+
+torch::Tensor FrameTurn::cloud_in(const torch::Tensor& cloud) const {
+  const torch::Tensor x = cloud.select(2, 0), y = cloud.select(2, 1);  // [B, C]
+  return torch::stack({cos * x + sin * y, -sin * x + cos * y}, 2);
+}
+
+torch::Tensor FrameTurn::xi_in(const torch::Tensor& xi) const { return turn_pairs(xi, xi_pairs(xi.size(1) / 2), cos, -sin); }
+
+torch::Tensor FrameTurn::outputs_out(const torch::Tensor& outputs, const NetworkConfig& config) const {
+  return turn_pairs(outputs, io::OutputLayout(config).turning_pairs(), cos, sin);
+}
+
 CvaeForward CvaeImpl::forward(const torch::Tensor& observation, const torch::Tensor& cloud,
                               const torch::Tensor& expert_xi) {
-  const torch::Tensor f = features(cloud);
-  Posterior q = encode(observation, f, expert_xi);
+  if (!config_.target_frame) {
+    const torch::Tensor f = features(cloud);
+    Posterior q = encode(observation, f, expert_xi);
+    const torch::Tensor z = q.mean + q.sigma * torch::randn_like(q.sigma);
+    return {decode(z, observation, f), std::move(q)};
+  }
+  const FrameTurn turn(observation);
+  const torch::Tensor o = turn.observation_in(observation);
+  const torch::Tensor f = features(turn.cloud_in(cloud));
+  Posterior q = encode(o, f, turn.xi_in(expert_xi));
   const torch::Tensor z = q.mean + q.sigma * torch::randn_like(q.sigma);
-  return {decode(z, observation, f), std::move(q)};
+  return {turn.outputs_out(decode(z, o, f), config_), std::move(q)};
+}
+
+torch::Tensor CvaeImpl::sample(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& cloud) {
+  if (!config_.target_frame) return decode(z, observation, features(cloud));
+  const FrameTurn turn(observation);
+  const torch::Tensor o = turn.observation_in(observation);
+  return turn.outputs_out(decode(z, o, features(turn.cloud_in(cloud))), config_);
 }
 
 std::vector<std::pair<std::string, torch::Tensor>> named_model_tensors(CvaeImpl& model) {

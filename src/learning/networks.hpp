@@ -131,6 +131,20 @@ class DecoderImpl : public torch::nn::Module {
 };
 TORCH_MODULE(Decoder);
 
+/// The network frame of a target-frame model (io::NetworkConfig::target_frame; docs/learning.md, "Target
+/// frame"), per row: turned about the robot by the bearing of the target (observation columns 2 and 3), so
+/// that the target lies on +x; the identity for a target on the robot. policy::FrameRotation is the Eigen twin.
+struct FrameTurn {
+  torch::Tensor cos, sin;  ///< [B, 1]
+  explicit FrameTurn(const torch::Tensor& observation);
+  /// Observation [B, 6], cloud [B, C, 2] and expert coefficients [B, 2n] (x block, then y) into the frame.
+  torch::Tensor observation_in(const torch::Tensor& observation) const;
+  torch::Tensor cloud_in(const torch::Tensor& cloud) const;
+  torch::Tensor xi_in(const torch::Tensor& xi) const;
+  /// Decoder outputs [B, Y] out of the frame (io::OutputLayout::turning_pairs turn; d_min, d_max do not).
+  torch::Tensor outputs_out(const torch::Tensor& outputs, const io::NetworkConfig& config) const;
+};
+
 struct CvaeForward {
   torch::Tensor outputs;  ///< decoder outputs y (scaled, before post-processing), [B, Y]
   Posterior posterior;    ///< q(z | ...), for the KL term
@@ -151,9 +165,15 @@ class CvaeImpl : public torch::nn::Module {
   Posterior encode(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& expert_xi);
   /// Decoder outputs y = raw * scale + offset, [B, Y], from z [B, Z] and raw observation [B, O].
   torch::Tensor decode(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& features);
+  /// features(), encode() and decode() work in the network's frame: for a target-frame model (config().target_frame)
+  /// the caller turns their inputs and outputs (FrameTurn). forward() and sample() take and return robot-centric
+  /// tensors and turn by themselves.
   /// Training pass: z = mu + sigma * eps with eps ~ N(0, I) from torch's global generator.
   CvaeForward forward(const torch::Tensor& observation, const torch::Tensor& cloud, const torch::Tensor& expert_xi);
 
+  /// Inference: decoder outputs [B, Y] (robot-centric, before post-processing) of latent samples z [B, Z] for
+  /// robot-centric observation [B, O] and cloud [B, C, 2].
+  torch::Tensor sample(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& cloud);
   const io::NetworkConfig& config() const { return config_; }
 
   Normalization norm{nullptr};

@@ -70,6 +70,7 @@ std::string default_model_path(policy::Variant variant) {
 struct LearnedPolicy::Impl {
   LearnedPolicySettings settings;
   policy::Model model;
+  policy::FrameRotation turn;  // the model's network frame
   detail::Context context;
   std::optional<projection::Projector<float>> projector;  // none for bc
   projection::Problem<float> problem;
@@ -96,7 +97,7 @@ struct LearnedPolicy::Impl {
   bool has_last = false;
 
   Impl(const LearnedPolicySettings& s, policy::Model m)
-      : settings(occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant))), model(std::move(m)), context(batch_settings(s), s.perception, s.ranking, s.response_time), rng(s.seed) {
+      : settings(occtrack::detail::checked(s, "planner " + learned_planner_name(s.variant))), model(std::move(m)), turn(model.network()), context(batch_settings(s), s.perception, s.ranking, s.response_time), rng(s.seed) {
     settings.rank_stop = ranks_stop(s);
     const std::string planner = learned_planner_name(s.variant);
     model.require_variant(s.variant, planner);
@@ -232,18 +233,22 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
   //    max-pooled feature (perception.hpp, fixed cloud).
   const Frame& frame = s.record.frame;
   const Eigen::Index distinct = std::max<Eigen::Index>(1, std::min<Eigen::Index>(frame.occluder_count, frame.cloud.rows()));
+  // The observation, and the cloud and the decoder's outputs, in the network's frame (target-frame models).
+  s.observation << static_cast<float>(frame.robot_velocity.x()), static_cast<float>(frame.robot_velocity.y()),
+      static_cast<float>(frame.target(0)), static_cast<float>(frame.target(1)), static_cast<float>(frame.target(2)),
+      static_cast<float>(frame.target(3));
   s.cloud.topRows(distinct) = frame.cloud.topRows(distinct).cast<float>();
+  s.turn.aim(frame.target(0), frame.target(1));
+  s.turn.into_network(s.observation, s.cloud.topRows(distinct));
   s.model.features(s.cloud.topRows(distinct), s.features);
   const auto encoded = Clock::now();
   s.timing.pointnet = ms_between(observed, encoded);
 
   // 3-4. Latent samples, decoder, post-processing, one projection problem row per sample.
-  s.observation << static_cast<float>(frame.robot_velocity.x()), static_cast<float>(frame.robot_velocity.y()),
-      static_cast<float>(frame.target(0)), static_cast<float>(frame.target(1)), static_cast<float>(frame.target(2)),
-      static_cast<float>(frame.target(3));
   for (int b = 0; b < B; ++b)
     for (Eigen::Index j = 0; j < s.z.cols(); ++j) s.z(b, j) = static_cast<float>(s.normal(s.rng));
   s.model.decode(s.z, s.observation, s.features, s.outputs);
+  s.turn.out_of_network(s.outputs);
   s.model.postprocess(s.outputs, cfg.projection.speed_max, cfg.ranking.band.min);
   if (project) {
     s.robot_velocity = frame.robot_velocity.transpose().cast<float>();

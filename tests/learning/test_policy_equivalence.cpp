@@ -57,6 +57,64 @@ torch::Tensor tensor_of(const Eigen::Ref<const policy::Rows>& m) {
 
 }  // namespace
 
+// A target-frame model: torch's sample() (which turns by itself) and the Eigen model behind
+// policy::FrameRotation give the same robot-centric outputs; and the normalisation is of the turned rows.
+TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
+  io::NetworkConfig config;
+  config.pointnet_widths = {8, 16, 16, 24, 32};
+  config.pointnet_hidden = 24;
+  config.features = 12;
+  config.hidden = 40;
+  config.layers = 2;
+  config.target_frame = true;
+  config.outputs = config.expected_outputs();
+  torch::manual_seed(12);
+  learning::Cvae model(config, /*dropout=*/0.3);
+  randomize(*model);
+  model->eval();
+  learning::ModelMetadata metadata;
+  metadata.network = config;
+  metadata.projection.obstacles = config.nearest_points;
+  metadata.created_by = "test_policy_equivalence";
+  policy::Model eigen(io::validate_model_file(io::to_tensor_file(learning::model_file(*model, metadata))));
+  ASSERT_TRUE(eigen.network().target_frame);
+
+  torch::NoGradGuard no_grad;
+  const int B = 6, C = config.cloud_points;
+  const torch::Tensor cloud = torch::randn({1, C, 2}) * 3.0;
+  const torch::Tensor observation = torch::randn({1, 6});
+  const torch::Tensor z = torch::randn({B, config.latent});
+  const torch::Tensor outputs = model->sample(z, observation.expand({B, 6}), cloud.expand({B, C, 2}));
+
+  Eigen::VectorXf obs = rows_of(observation).row(0).transpose();
+  policy::Cloud eigen_cloud = rows_of(cloud[0]);
+  policy::FrameRotation turn(eigen.network());
+  turn.aim(obs(2), obs(3));
+  turn.into_network(obs, eigen_cloud);
+  Eigen::VectorXf features(config.features);
+  eigen.features(eigen_cloud, features);
+  policy::Rows eigen_outputs(B, config.outputs);
+  eigen.decode(rows_of(z), obs, features, eigen_outputs);
+  turn.out_of_network(eigen_outputs);
+  EXPECT_LT(mismatch(tensor_of(eigen_outputs), outputs), 1e-5);
+  // In the network's frame the target lies on +x.
+  EXPECT_NEAR(obs(3), 0.0f, 1e-6);
+  EXPECT_GT(obs(2), 0.0f);
+  // And the robot-frame reading of the same weights differs (the turn is not a no-op here).
+  io::NetworkConfig robot = config;
+  robot.target_frame = false;
+  metadata.network = robot;
+  learning::Cvae plain(robot, 0.3);
+  {
+    auto from = learning::named_model_tensors(*model);
+    auto to = learning::named_model_tensors(*plain);
+    for (std::size_t i = 0; i < from.size(); ++i) to[i].second.copy_(from[i].second);
+  }
+  plain->eval();
+  const torch::Tensor unturned = plain->sample(z, observation.expand({B, 6}), cloud.expand({B, C, 2}));
+  EXPECT_GT(mismatch(unturned, outputs), 1e-3);
+}
+
 TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
   for (const bool small : {true, false}) {
     SCOPED_TRACE(small ? "small network" : "default network");

@@ -120,11 +120,22 @@ double mean_total(const std::vector<learning::LossTerms>& history, std::size_t b
 TEST_F(Training, ShortRunLowersTheLoss) {
   const std::string data = path("data.safetensors");
   io::write_safetensors(data, dataset_file(64));
-  for (const auto variant : {io::Variant::cvae, io::Variant::bc}) {
-    SCOPED_TRACE(io::to_string(variant));
+  for (const auto& [variant, target_frame] :
+       {std::pair{io::Variant::cvae, false}, std::pair{io::Variant::bc, false}, std::pair{io::Variant::cvae, true}}) {
+    SCOPED_TRACE(std::string(io::to_string(variant)) + (target_frame ? ", target frame" : ""));
     learning::TrainingSettings s = small_settings();
     s.variant = variant;
+    s.network.target_frame = target_frame;
     learning::Trainer trainer(s, learning::load_dataset({data}));
+    // The normalisation is of what the networks see: in the target frame the target lies on +x.
+    const auto& norm = trainer.model()->norm->observation;
+    if (target_frame) {
+      EXPECT_NEAR(norm->mean[3].item<double>(), 0.0, 1e-5);
+      EXPECT_NEAR(norm->std[3].item<double>(), 1e-3, 1e-6);  // the floor
+      EXPECT_GT(norm->mean[2].item<double>(), 0.5);          // the target's distance
+    } else {
+      EXPECT_GT(norm->std[3].item<double>(), 0.1);
+    }
     EXPECT_EQ(trainer.split().validation_episodes, 1);
     EXPECT_EQ(trainer.split().train.numel() + trainer.split().validation.numel(), 64);
     int reports = 0;

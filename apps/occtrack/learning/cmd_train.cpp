@@ -26,6 +26,7 @@ struct TrainOptions {
   std::vector<std::string> data;
   std::string out;
   std::string variant = "cvae";
+  std::string frame = "robot";
   std::string resume;
   int threads = 0;
   learning::TrainingSettings settings;
@@ -63,7 +64,7 @@ std::string canonical_command(const TrainOptions& o) {
     << " --pointnet-widths ";
   for (std::size_t i = 0; i < s.network.pointnet_widths.size(); ++i)
     c << (i ? "," : "") << s.network.pointnet_widths[i];
-  c << " --latent " << s.network.latent << " --dropout " << s.dropout;
+  c << " --latent " << s.network.latent << " --dropout " << s.dropout << " --frame " << o.frame;
   if (s.learning_rate_final >= 0) c << " --lr-final " << s.learning_rate_final;
   if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
   if (s.plain_projection) c << " --plain-projection";
@@ -75,6 +76,7 @@ int run(TrainOptions o) {
   const char* who = "occtrack train: ";
   keep_large_allocations();
   o.settings.variant = io::parse_variant(o.variant);
+  o.settings.network.target_frame = o.frame == "target";
   if (o.threads > 0) torch::set_num_threads(o.threads);
   if (o.settings.checkpoint_path.empty() && !o.resume.empty()) o.settings.checkpoint_path = o.resume;
 
@@ -127,6 +129,10 @@ void add_train_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", o->out, "Model file to write (occtrack.model.v1 safetensors)")->required();
   add_choice_option(cmd, "--variant", o->variant, "cvae, bc (no projection) or fixed-q (nominal q)",
                     {"cvae", "bc", "fixed-q"});
+  add_choice_option(cmd, "--frame", o->frame,
+                    "What the networks see: robot (robot-centric, world axes) or target (also turned so that the "
+                    "target lies on +x; docs/learning.md, \"Target frame\")",
+                    {"robot", "target"});
   add_bounded_option(cmd, "--steps", s.steps, "Optimisation steps in all (a resumed run continues up to this)",
                      int64_t{0}, int64_t{1} << 40);
   add_bounded_option(cmd, "--batch", s.batch, "Rows per mini-batch", int64_t{1}, int64_t{1} << 24);

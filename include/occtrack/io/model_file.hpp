@@ -16,6 +16,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "occtrack/core/tracking.hpp"
@@ -57,6 +58,11 @@ struct NetworkConfig {
   int coefficients = 11;      ///< n = degree + 1
   int steps = 100;            ///< m
   double batch_norm_eps = 1e-5;
+  /// The frame the networks see (docs/learning.md, "Target frame"). false: robot-centric, axes parallel to the
+  /// world's (every model before issue 12; metadata "frame": "robot" or no "frame"). true: also rotated about
+  /// the robot so that the target lies on +x ("frame": "target"); the policy rotates the observation and the
+  /// cloud into it and the decoder's outputs back (io::OutputLayout::turning_pairs).
+  bool target_frame = false;
 
   /// The default sizes, with n, m, N and Y taken from the projection settings.
   static NetworkConfig for_projection(const projection::Settings& settings);
@@ -84,7 +90,13 @@ struct OutputLayout {
   int size = 0;          ///< Y
 
   explicit OutputLayout(const NetworkConfig& network);
+  /// The (x, y) column pairs of the outputs that turn with the frame: terminal position and velocity, both via
+  /// points, and every coefficient pair of lambda0 and xi_bar (x block, then y block). d_min and d_max do not.
+  std::vector<std::pair<int, int>> turning_pairs() const;
 };
+
+/// The (x, y) pairs of the observation (robot velocity, target position, target velocity): every entry turns.
+inline constexpr int kObservationPairs[3][2] = {{0, 1}, {2, 3}, {4, 5}};
 
 /// The metadata JSON of a tracking band: {"max": 3.0, "min": 1.0, "reference": 2.0}.
 std::string band_json(const core::TrackingBand& band);

@@ -112,6 +112,32 @@ class Model {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The turn between a model's network frame and the robot-centric frame (io::NetworkConfig::target_frame;
+/// docs/learning.md, "Target frame"). For a target-frame model, aim() turns by the target's bearing, so that
+/// the target lies on +x in the network's frame; for a robot-frame model, and for a target on the robot, it is
+/// the identity. Build once per model (it lists the turning outputs); aim() and the turns allocate nothing.
+///
+///   policy::FrameRotation turn(model.network());
+///   turn.aim(target_x, target_y);                  // robot-centric target position
+///   turn.into_network(observation, cloud);         // in place
+///   model.features(cloud, features); model.decode(z, observation, features, outputs);
+///   turn.out_of_network(outputs);                  // in place, before postprocess()
+class FrameRotation {
+ public:
+  explicit FrameRotation(const NetworkConfig& network);
+  bool turns() const { return target_frame_; }
+  void aim(double target_x, double target_y);
+  /// observation (size 6: three (x, y) pairs) and cloud (C x 2) into the network's frame.
+  void into_network(Eigen::Ref<Eigen::VectorXf> observation, Eigen::Ref<Cloud> cloud) const;
+  /// Every row of the decoder outputs (B x Y) from the network's frame back to the robot-centric one.
+  void out_of_network(Eigen::Ref<Rows> outputs) const;
+
+ private:
+  bool target_frame_ = false;
+  float cos_ = 1.0f, sin_ = 0.0f;
+  std::vector<std::pair<int, int>> pairs_;  // the outputs' turning (x, y) columns
+};
+
 /// A model file with random weights of the right shapes and plausible normalisation (outputs near a straight
 /// path towards +x, distance bounds near the default band), for tests and benchmarks before a trained model
 /// exists, written through io::to_tensor_file. Deterministic in the seed. `variant` is "cvae", "bc" or
