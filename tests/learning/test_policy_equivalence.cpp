@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <utility>
 
 #include "learning/export.hpp"
 #include "learning/networks.hpp"
@@ -55,20 +56,22 @@ torch::Tensor tensor_of(const Eigen::Ref<const policy::Rows>& m) {
   return torch::from_blob(const_cast<float*>(m.data()), {m.rows(), m.cols()}, torch::kFloat32).clone();
 }
 
-}  // namespace
-
-// A target-frame model: torch's sample() (which turns by itself) and the Eigen model behind
-// policy::FrameRotation give the same robot-centric outputs; and the normalisation is of the turned rows.
-TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
+// The small network of these tests (the default's shape, narrower).
+io::NetworkConfig small_config() {
   io::NetworkConfig config;
   config.pointnet_widths = {8, 16, 16, 24, 32};
   config.pointnet_hidden = 24;
   config.features = 12;
   config.hidden = 40;
   config.layers = 2;
-  config.target_frame = true;
+  config.latent = 3;
   config.outputs = config.expected_outputs();
-  torch::manual_seed(12);
+  return config;
+}
+
+// A randomized torch model in eval mode, and the Eigen policy of its exported file.
+std::pair<learning::Cvae, policy::Model> model_pair(const io::NetworkConfig& config, uint64_t seed) {
+  torch::manual_seed(seed);
   learning::Cvae model(config, /*dropout=*/0.3);
   randomize(*model);
   model->eval();
@@ -77,6 +80,17 @@ TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
   metadata.projection.obstacles = config.nearest_points;
   metadata.created_by = "test_policy_equivalence";
   policy::Model eigen(io::validate_model_file(io::to_tensor_file(learning::model_file(*model, metadata))));
+  return {model, std::move(eigen)};
+}
+
+}  // namespace
+
+// A target-frame model: torch's sample() (which turns by itself) and the Eigen model behind
+// policy::FrameRotation give the same robot-centric outputs; and the normalisation is of the turned rows.
+TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
+  io::NetworkConfig config = small_config();
+  config.target_frame = true;
+  auto [model, eigen] = model_pair(config, 12);
   ASSERT_TRUE(eigen.network().target_frame);
 
   torch::NoGradGuard no_grad;
@@ -103,7 +117,6 @@ TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
   // And the robot-frame reading of the same weights differs (the turn is not a no-op here).
   io::NetworkConfig robot = config;
   robot.target_frame = false;
-  metadata.network = robot;
   learning::Cvae plain(robot, 0.3);
   {
     auto from = learning::named_model_tensors(*model);
@@ -118,26 +131,8 @@ TEST_F(PolicyEquivalence, TargetFrameModelsTurnAlikeInTorchAndEigen) {
 TEST_F(PolicyEquivalence, TorchAndEigenGiveTheSameOutputs) {
   for (const bool small : {true, false}) {
     SCOPED_TRACE(small ? "small network" : "default network");
-    io::NetworkConfig config;  // defaults of docs/learning.md
-    if (small) {
-      config.pointnet_widths = {8, 16, 16, 24, 32};
-      config.pointnet_hidden = 24;
-      config.features = 12;
-      config.hidden = 40;
-      config.layers = 2;
-      config.latent = 3;
-    }
-    config.outputs = config.expected_outputs();
-    torch::manual_seed(11);
-    learning::Cvae model(config, /*dropout=*/0.3);
-    randomize(*model);
-    model->eval();
-
-    learning::ModelMetadata metadata;
-    metadata.network = config;
-    metadata.projection.obstacles = config.nearest_points;
-    metadata.created_by = "test_policy_equivalence";
-    policy::Model eigen(io::validate_model_file(io::to_tensor_file(learning::model_file(*model, metadata))));
+    io::NetworkConfig config = small ? small_config() : io::NetworkConfig{};  // or the defaults of docs/learning.md
+    auto [model, eigen] = model_pair(config, 11);
     ASSERT_EQ(eigen.network().features, config.features);
     ASSERT_EQ(eigen.network().outputs, config.outputs);
 
