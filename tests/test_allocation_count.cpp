@@ -20,6 +20,7 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/policy/model.hpp"
 #include "occtrack/sim/episode.hpp"
@@ -317,6 +318,12 @@ TEST(AllocationCount, LearnedPlanDoesNotAllocateAfterTheFirstCycle) {
     std::unique_ptr<planners::Planner> planner = planners::make_planner(variant, options);
     EXPECT_EQ(planner_allocations(*planner), "") << variant;
   }
+  // A target-frame model turns its inputs and outputs in place (policy::FrameRotation).
+  planners::LearnedPolicySettings settings;
+  policy::NetworkConfig network = policy::NetworkConfig::for_projection(settings.projection);
+  network.target_frame = true;
+  planners::LearnedPolicy turned(settings, policy::Model(policy::random_model(network, settings.projection, "cvae", 3)));
+  EXPECT_EQ(planner_allocations(turned), "") << "cvae, target frame";
 }
 
 TEST(AllocationCount, ShieldedPlannersDoNotAllocateAfterTheFirstCycle) {
