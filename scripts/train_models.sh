@@ -19,12 +19,12 @@
 #   BC_STEPS        steps of bc, which has no projection and is far cheaper per step [4 x STEPS]
 #   MAX_MINUTES     stop each training after this many minutes and write the model (0: no limit) [0]
 #   THREADS         torch CPU threads per training [1]
-#   FRAME           what the networks see: robot or target (docs/learning.md, "Target frame") [robot]
+#   FRAME           what the networks see: robot or target (docs/learning.md, "Target frame") [target]
 # Every dataset file in DATA named demo-*.safetensors is trained on, older ones included.
 #
 # The shipped models were made on the 2-core dev machine, no GPU, from the 6400 rows of demo-a and demo-b
 # (2 x 16 episodes of 20 s, seeds 5000 and 6000, the full expert: 2000 samples x 4 iterations):
-#   OCCTRACK=build/occtrack CHUNKS=0 STEPS=4000 BC_STEPS=4000 BATCH=256 MAX_MINUTES=50 scripts/train_models.sh cpu
+#   OCCTRACK=build/occtrack CHUNKS=0 STEPS=4000 BC_STEPS=4000 BATCH=256 MAX_MINUTES=50 FRAME=robot scripts/train_models.sh cpu
 # with the two demo files made first (README, "Training a model"). docs/results.md gives the time and losses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -66,7 +66,7 @@ for variant in "${variants[@]}"; do
   variant_steps=$steps
   [ "$variant" = bc ] && variant_steps=${BC_STEPS:-$(( 4 * steps ))}
   "$occtrack" train "${files[@]}" --variant "$variant" --device "$device" --threads "${THREADS:-1}" --seed 1 \
-    --frame "${FRAME:-robot}" --steps "$variant_steps" --batch "${BATCH:-512}" --iterations "${ITERATIONS:-20}" --lr "${LR:-1e-3}" \
+    --frame "${FRAME:-target}" --steps "$variant_steps" --batch "${BATCH:-512}" --iterations "${ITERATIONS:-20}" --lr "${LR:-1e-3}" \
     --lr-final "${LR_FINAL:-1e-4}" --max-minutes "${MAX_MINUTES:-100000}" --out "$models/$variant.safetensors" \
     --checkpoint "$data/$variant.checkpoint" --progress-seconds 30 > "$data/train-$variant.log" 2>&1 &
 done
