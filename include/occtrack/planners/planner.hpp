@@ -42,7 +42,8 @@ enum class SafetyAction {
                 ///< radius) farthest from moving obstacles' paths
   brake,        ///< nothing could be certified, nor stays in known-free space: full brake (command zero)
 };
-constexpr int kSafetyActions = 7;  ///< how many SafetyAction values there are
+/// How many SafetyAction values there are (brake is the last).
+constexpr int kSafetyActions = static_cast<int>(SafetyAction::brake) + 1;
 /// The action's name as the result files spell it ("plan", "best_effort", ...; "off").
 constexpr const char* to_string(SafetyAction action) {
   switch (action) {
