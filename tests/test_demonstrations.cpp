@@ -250,6 +250,62 @@ TEST(Demonstrations, SameSeedGivesIdenticalBytesWhateverTheJobs) {
   EXPECT_FALSE(one == other) << "another seed should make other worlds";
 }
 
+TEST(Demonstrations, V2EpisodesInThePaperWorldsWithTeleopTargetsLatencyAndAShieldedDriver) {
+  sim::DemonstrationSettings s = tiny();
+  s.episodes = 4;
+  s.duration = 2.0;
+  s.worlds = {sim::DemonstrationWorld::sixwall, sim::DemonstrationWorld::sixwall_sliding,
+              sim::DemonstrationWorld::random, sim::DemonstrationWorld::clutter_dynamic};
+  s.target_speeds = {2.5};
+  s.target = sim::DemonstrationTarget::teleop;
+  s.episode.latency_ms = 20.0;
+  s.episode.tau = 0.25;
+  s.episode.beams = 360;
+  s.episode.lidar_noise = 0.01;
+  s.episode.target_position_noise = 0.05;
+  s.episode.target_velocity_noise = 0.1;
+  s.driver = "follower";
+  s.driver_options.shield = true;
+  s.driver_options.response_time = 0.25;
+  s.driver_options.latency = 0.02;
+  sim::DemonstrationReport report;
+  const sim::Demonstrations data = sim::generate_demonstrations(s, &report);
+  EXPECT_EQ(report.episodes, 4);
+  EXPECT_EQ(report.episodes_failed, 0) << (report.failures.empty() ? "" : report.failures.front());
+  EXPECT_EQ(report.cycles, 4 * 40);  // a 20 ms latency is under the 50 ms period: no cycle is skipped
+  EXPECT_EQ(report.labelled, 4 * 40);
+  EXPECT_GT(report.rows, 4 * 35);
+  const auto generator = nlohmann::json::parse(data.metadata.at("generator"));
+  EXPECT_EQ(generator.at("world_kinds"),
+            nlohmann::json({"sixwall", "sixwall-sliding", "random", "clutter-dynamic"}));
+  EXPECT_EQ(generator.at("target"), "teleop");
+  EXPECT_EQ(generator.at("latency_ms"), 20.0);
+  EXPECT_EQ(generator.at("tau"), 0.25);
+  EXPECT_EQ(generator.at("beams"), 360);
+  EXPECT_EQ(generator.at("target_noise"), nlohmann::json({0.05, 0.1}));
+  EXPECT_EQ(generator.at("driver_shield"), true);
+  EXPECT_EQ(data.metadata.at("driver"), "follower");
+
+  // A tele-operated target is not the smooth one: the same seed and forest world give other rows.
+  sim::DemonstrationSettings forest = tiny();
+  forest.episodes = 1;
+  forest.duration = 1.0;
+  forest.worlds = {sim::DemonstrationWorld::forest};
+  const sim::Demonstrations smooth_rows = sim::generate_demonstrations(forest);
+  forest.target = sim::DemonstrationTarget::teleop;
+  const sim::Demonstrations teleop_rows = sim::generate_demonstrations(forest);
+  ASSERT_GT(smooth_rows.rows, 0);
+  ASSERT_GT(teleop_rows.rows, 0);
+  EXPECT_NE(smooth_rows.observation, teleop_rows.observation);
+
+  for (auto world : {sim::DemonstrationWorld::forest, sim::DemonstrationWorld::clutter_dynamic,
+                     sim::DemonstrationWorld::sixwall_sliding, sim::DemonstrationWorld::random})
+    EXPECT_EQ(sim::parse_demonstration_world(sim::to_string(world)), world);
+  EXPECT_EQ(sim::parse_demonstration_target("teleop"), sim::DemonstrationTarget::teleop);
+  EXPECT_FALSE(sim::parse_demonstration_target("wild"));
+  EXPECT_FALSE(sim::parse_demonstration_world("sixwall_sliding"));
+}
+
 TEST(Demonstrations, BenchmarkSeedsAreRefusedWithTheSeedRange) {
   sim::DemonstrationSettings s = tiny();
   std::string error;
@@ -313,6 +369,9 @@ TEST(Demonstrations, BadSettingsAreNamed) {
   s.driver = "projcem";
   s.label_every = 20;  // 1 s between the expert's scans: its velocity tracks would never last
   expect_refused(s, "label_every");
+  s = tiny();
+  s.episode.latency_ms = 50.0;  // a whole planning period: cycles would be skipped, labels would drift
+  expect_refused(s, "episode.latency_ms");
   s = tiny();
   s.driver = "no-such-planner";
   try {

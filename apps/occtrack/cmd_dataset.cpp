@@ -2,6 +2,8 @@
 //                           [--worlds forest,boxes,mixed,dynamic] [--speeds 1,1.5,2] [--label-every 1]
 //                           [--driver expert|projcem|NAME] [--model FILE] [--jobs J]
 //                           [--expert-samples 120] [--expert-iterations 8] [--expert-settle 0]
+//                           [--target smooth|teleop] [--no-shield] [Protocol v2: --latency MS --tau S
+//                           --beams N --lidar-noise SIGMA --target-noise POS,VEL ...]
 // occtrack dataset info FILE
 // occtrack dataset merge --out FILE IN IN...
 //
@@ -41,6 +43,9 @@ struct GenerateOptions {
   int expert_samples = planners::ProjCemSettings::offline_expert(1).samples;
   int expert_iterations = planners::ProjCemSettings::offline_expert(1).cem_iterations;
   double expert_settle = planners::ProjCemSettings::offline_expert(1).settle_distance;
+  std::string target = "smooth";
+  /// Protocol v2 settings of every episode, and the driver's shield (on, as on the command line's planners).
+  EpisodeCliOptions episode;
 };
 
 struct MergeOptions {
@@ -76,6 +81,16 @@ std::string canonical_command(const GenerateOptions& o) {
   if (!o.model.empty()) text += " --model " + o.model;
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
+  const EpisodeCliOptions& e = o.episode;
+  text += " --target " + o.target + (e.planner_options.shield ? "" : " --no-shield");
+  if (e.latency != "none") text += " --latency " + e.latency;
+  if (e.tau != 0.0) text += " --tau " + number_text(e.tau);
+  if (!e.beams.empty()) text += " --beams " + e.beams;
+  if (!e.lidar_noise.empty()) text += " --lidar-noise " + e.lidar_noise;
+  if (!e.beam_dropout.empty()) text += " --beam-dropout " + e.beam_dropout;
+  if (!e.target_noise.empty()) text += " --target-noise " + e.target_noise;
+  if (!e.response_time.empty()) text += " --response-time " + e.response_time;
+  if (e.target_observation != "always") text += " --target-observation " + e.target_observation;
   return text;
 }
 
@@ -85,7 +100,8 @@ std::string option_of(const std::string& message) {
       {"episodes", "--episodes"},     {"first_seed", "--seed"},          {"worlds", "--worlds"},
       {"target_speeds", "--speeds"},  {"duration", "--duration"},        {"label_every", "--label-every"},
       {"driver", "--driver"},         {"jobs", "--jobs"},                {"expert.samples", "--expert-samples"},
-      {"expert.cem_iterations", "--expert-iterations"}, {"expert.settle_distance", "--expert-settle"}};
+      {"expert.cem_iterations", "--expert-iterations"}, {"expert.settle_distance", "--expert-settle"},
+      {"episode.latency_ms", "--latency"}};
   for (const auto& [field, option] : fields)
     if (message.rfind(field, 0) == 0) return std::string(option) + ": ";
   return "";
@@ -111,12 +127,30 @@ int generate(const GenerateOptions& o) {
   for (const std::string& name : o.worlds) {
     const auto world = sim::parse_demonstration_world(name);
     if (!world) {
-      std::cerr << who << "--worlds: unknown world kind '" << name << "' (forest, boxes, mixed, dynamic)\n";
+      std::cerr << who << "--worlds: unknown world kind '" << name
+                << "' (forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, sixwall-sliding, random)\n";
       return kExitInputError;
     }
     s.worlds.push_back(*world);
   }
   s.target_speeds = o.speeds;
+  const auto target = sim::parse_demonstration_target(o.target);
+  if (!target) {
+    std::cerr << who << "--target: must be smooth or teleop, got '" << o.target << "'\n";
+    return kExitInputError;
+  }
+  s.target = *target;
+  if (o.episode.latency_auto()) {
+    std::cerr << who << "--latency: give a number of ms; auto is measured per planner in `bench` and `run` only\n";
+    return kExitInputError;
+  }
+  try {
+    s.episode = o.episode.settings();
+    s.driver_options = o.episode.planner_settings(&s.episode);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << who << e.what() << "\n";
+    return kExitInputError;
+  }
   s.duration = o.duration;
   s.label_every = o.label_every;
   s.driver = o.driver;
@@ -139,12 +173,13 @@ int generate(const GenerateOptions& o) {
 
   const int jobs = std::min(o.jobs, o.episodes);
   std::fprintf(stderr,
-               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; target speeds %s m/s), driver %s, "
-               "expert %d samples x %d CEM iterations, labelling 1 cycle in %d, %d jobs\n",
+               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; %s target, top speeds %s m/s), driver "
+               "%s%s, expert %d samples x %d CEM iterations, labelling 1 cycle in %d, latency %s, tau %g s, %d jobs\n",
                o.episodes, o.duration, static_cast<unsigned long long>(o.seed),
                static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)), join(o.worlds).c_str(),
-               speeds_text(o).c_str(),
-               o.driver.c_str(), o.expert_samples, o.expert_iterations, o.label_every, jobs);
+               o.target.c_str(), speeds_text(o).c_str(), o.driver.c_str(),
+               o.driver != "expert" && s.driver_options.shield ? " (shield on)" : "", o.expert_samples,
+               o.expert_iterations, o.label_every, o.episode.latency.c_str(), o.episode.tau, jobs);
   Progress progress("dataset");
   sim::DemonstrationReport report;
   const sim::Demonstrations data = sim::generate_demonstrations(s, &report, [&](const sim::DemonstrationProgress& p) {
@@ -181,12 +216,21 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
   gen->add_option("--seed", o->seed, "First seed; episode i uses seed + i (none may fall in 1000-1999)")
       ->capture_default_str();
   gen->add_option("--duration", o->duration, "Simulated seconds per episode")->capture_default_str();
-  gen->add_option("--worlds", o->worlds, "World kinds, used in turn: forest, boxes, mixed, dynamic")
+  gen->add_option("--worlds", o->worlds,
+                  "World kinds, used in turn: forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, "
+                  "sixwall-sliding, random")
       ->delimiter(',')
       ->capture_default_str();
   gen->add_option("--speeds", o->speeds, "Target top speeds (m/s), used in turn after every world kind")
       ->delimiter(',')
       ->capture_default_str();
+  add_choice_option(gen, "--target", o->target,
+                    "How the target moves: smooth (the v1 suites' generator) or teleop (the v2 suites' "
+                    "tele-operator; the paper's worlds always use it)",
+                    {"smooth", "teleop"});
+  gen->add_flag("--shield,!--no-shield", o->episode.planner_options.shield,
+                "On by default: a driver other than the expert goes through the safety layer (docs/safety.md)");
+  add_protocol_options(gen, o->episode);
   gen->add_option("--label-every", o->label_every, "Label one planning cycle in this many")->capture_default_str();
   std::string names = join(planners::planner_names(), ", ");
   gen->add_option("--driver", o->driver,

@@ -171,6 +171,43 @@ struct EpisodeCliOptions {
   }
 };
 
+/// The Protocol v2 options (shared/spec/simulation.md, "Protocol v2"): latency, compute scale, robot lag,
+/// sensor and target noise, response time, target observation. add_episode_options() registers them with the
+/// planner's; `dataset generate` registers them alone.
+inline void add_protocol_options(CLI::App* cmd, EpisodeCliOptions& o) {
+  namespace e = episode_cli;
+  cmd->add_option("--latency", o.latency,
+                  "Command latency: none (v1), a number of ms, or auto (the planner's median cycle on replayed "
+                  "scans, measured before the run, times --compute-scale); the next cycle starts once the "
+                  "command applies")
+      ->check(e::validator(e::check_latency, "none|auto|MS"))
+      ->capture_default_str();
+  cmd->add_option("--compute-scale", o.compute_scale,
+                  "Stands for a computer this many times slower (scales --latency auto; recorded)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY, true); }, "F > 0"))
+      ->capture_default_str();
+  cmd->add_option("--tau", o.tau, "Seconds: first-order lag of the robot's velocity behind the command (0: none)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"))
+      ->capture_default_str();
+  cmd->add_option("--beams", o.beams, "LiDAR beams over 360 degrees (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check_integer(t, 1); }, "N >= 1"));
+  cmd->add_option("--lidar-noise", o.lidar_noise, "LiDAR range noise, standard deviation in m (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "SIGMA >= 0"));
+  cmd->add_option("--beam-dropout", o.beam_dropout,
+                  "Probability that a LiDAR beam returns nothing (default: the scenario's)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1.0); }, "P in [0, 1]"));
+  cmd->add_option("--target-noise", o.target_noise,
+                  "Gaussian noise on the target estimate the planner receives: position (m), velocity (m/s)")
+      ->check(e::validator(e::check_noise_pair, "POS,VEL"));
+  cmd->add_option("--response-time", o.response_time,
+                  "Seconds: the robot's velocity lag the planner allows for by leading its command (default: --tau)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"));
+  add_choice_option(cmd, "--target-observation", o.target_observation,
+                    "always (v1), or line_of_sight: a fresh target estimate only while it is visible and in range, "
+                    "else the last one and its age",
+                    {"always", "line_of_sight"});
+}
+
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   namespace e = episode_cli;
   std::string names;
@@ -202,37 +239,7 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                 "Rank plans against the target predictor (constant velocity mixed with constant turn, near "
                 "future weighted most) instead of a constant-velocity target (docs/target_prediction.md)");
 
-  // Protocol v2 (shared/spec/simulation.md, "Protocol v2").
-  cmd->add_option("--latency", o.latency,
-                  "Command latency: none (v1), a number of ms, or auto (the planner's median cycle on replayed "
-                  "scans, measured before the run, times --compute-scale); the next cycle starts once the "
-                  "command applies")
-      ->check(e::validator(e::check_latency, "none|auto|MS"))
-      ->capture_default_str();
-  cmd->add_option("--compute-scale", o.compute_scale,
-                  "Stands for a computer this many times slower (scales --latency auto; recorded)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY, true); }, "F > 0"))
-      ->capture_default_str();
-  cmd->add_option("--tau", o.tau, "Seconds: first-order lag of the robot's velocity behind the command (0: none)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"))
-      ->capture_default_str();
-  cmd->add_option("--beams", o.beams, "LiDAR beams over 360 degrees (default: the scenario's)")
-      ->check(e::validator([](const std::string& t) { return e::check_integer(t, 1); }, "N >= 1"));
-  cmd->add_option("--lidar-noise", o.lidar_noise, "LiDAR range noise, standard deviation in m (default: the scenario's)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "SIGMA >= 0"));
-  cmd->add_option("--beam-dropout", o.beam_dropout,
-                  "Probability that a LiDAR beam returns nothing (default: the scenario's)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1.0); }, "P in [0, 1]"));
-  cmd->add_option("--target-noise", o.target_noise,
-                  "Gaussian noise on the target estimate the planner receives: position (m), velocity (m/s)")
-      ->check(e::validator(e::check_noise_pair, "POS,VEL"));
-  cmd->add_option("--response-time", o.response_time,
-                  "Seconds: the robot's velocity lag the planner allows for by leading its command (default: --tau)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, INFINITY); }, "S >= 0"));
-  add_choice_option(cmd, "--target-observation", o.target_observation,
-                    "always (v1), or line_of_sight: a fresh target estimate only while it is visible and in range, "
-                    "else the last one and its age",
-                    {"always", "line_of_sight"});
+  add_protocol_options(cmd, o);
 }
 
 /// The episode settings of `o`, with `--latency auto` resolved: the planner that `make` builds (by default

@@ -17,6 +17,7 @@
 #include "occtrack/io/error.hpp"
 #include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
+#include "occtrack/sim/paper_worlds.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
 namespace occtrack::sim {
@@ -31,7 +32,14 @@ constexpr std::pair<DemonstrationWorld, const char*> kDemonstrationWorldNames[] 
     {DemonstrationWorld::forest, "forest"},
     {DemonstrationWorld::boxes, "boxes"},
     {DemonstrationWorld::mixed, "mixed"},
-    {DemonstrationWorld::dynamic, "dynamic"}};
+    {DemonstrationWorld::dynamic, "dynamic"},
+    {DemonstrationWorld::clutter_dynamic, "clutter-dynamic"},
+    {DemonstrationWorld::sixwall, "sixwall"},
+    {DemonstrationWorld::sixwall_sliding, "sixwall-sliding"},
+    {DemonstrationWorld::random, "random"}};
+
+constexpr std::pair<DemonstrationTarget, const char*> kDemonstrationTargetNames[] = {
+    {DemonstrationTarget::smooth, "smooth"}, {DemonstrationTarget::teleop, "teleop"}};
 
 const char* to_string(DemonstrationWorld world) { return occtrack::detail::name_of(kDemonstrationWorldNames, world); }
 
@@ -39,33 +47,69 @@ std::optional<DemonstrationWorld> parse_demonstration_world(std::string_view tex
   return occtrack::detail::value_of(kDemonstrationWorldNames, text);
 }
 
+const char* to_string(DemonstrationTarget target) { return occtrack::detail::name_of(kDemonstrationTargetNames, target); }
+
+std::optional<DemonstrationTarget> parse_demonstration_target(std::string_view text) {
+  return occtrack::detail::value_of(kDemonstrationTargetNames, text);
+}
+
 namespace {
 
-/// The benchmark's world settings of a kind (their seeds are not used): the static suites' forest, boxes and
-/// mixed worlds, and the dynamic suite's world with moving obstacles.
-GeneratorSettings world_settings(DemonstrationWorld world) {
-  const bool dynamic = world == DemonstrationWorld::dynamic;
-  const std::optional<SuiteSpec> suite = find_suite(dynamic ? "dynamic-1.5ms" : "static-1ms");
+/// Where a kind's world and target come from: the benchmark suite that holds it (v1 for the smooth target,
+/// v2 for the tele-operated one) and, in a suite of several worlds, the kind of generated world to take.
+struct WorldSource {
+  const char* smooth_suite;  ///< nullptr: the kind has no smooth-target version (the paper's worlds)
+  const char* teleop_suite;
+  std::optional<WorldKind> kind;
+};
+
+WorldSource world_source(DemonstrationWorld world) {
+  switch (world) {
+    case DemonstrationWorld::forest: return {"static-1ms", "clutter-2ms", WorldKind::forest};
+    case DemonstrationWorld::boxes: return {"static-1ms", "clutter-2ms", WorldKind::boxes};
+    case DemonstrationWorld::mixed: return {"static-1ms", "clutter-2ms", WorldKind::mixed};
+    case DemonstrationWorld::dynamic: return {"dynamic-1.5ms", "clutter-dynamic-2ms", std::nullopt};
+    case DemonstrationWorld::clutter_dynamic: return {nullptr, "clutter-dynamic-2ms", std::nullopt};
+    case DemonstrationWorld::sixwall: return {nullptr, "sixwall-1ms", std::nullopt};
+    case DemonstrationWorld::sixwall_sliding: return {nullptr, "sixwall-dynamic-1.5ms", std::nullopt};
+    case DemonstrationWorld::random: return {nullptr, "random-2ms", std::nullopt};
+  }
+  throw std::logic_error("demonstrations: unknown world kind");
+}
+
+bool teleop_target(const DemonstrationSettings& s, DemonstrationWorld world) {
+  return s.target == DemonstrationTarget::teleop || world_source(world).smooth_suite == nullptr;
+}
+
+/// The suite and its world that an episode of this kind is drawn like.
+std::pair<SuiteSpec, SuiteWorld> source_world(DemonstrationWorld world, bool teleop) {
+  const WorldSource source = world_source(world);
+  const std::optional<SuiteSpec> suite = find_suite(teleop ? source.teleop_suite : source.smooth_suite);
   if (!suite || suite->worlds.empty()) throw std::logic_error("demonstrations: benchmark suites are missing");
-  if (dynamic) return suite->worlds.front().settings;
-  const WorldKind kind = world == DemonstrationWorld::forest  ? WorldKind::forest
-                         : world == DemonstrationWorld::boxes ? WorldKind::boxes
-                                                              : WorldKind::mixed;
   for (const SuiteWorld& w : suite->worlds)
-    if (w.settings.style.kind == kind) return w.settings;
+    if (!source.kind || (!w.fixed && w.settings.style.kind == *source.kind)) return {*suite, w};
   throw std::logic_error("demonstrations: no benchmark world of this kind");
 }
 
-/// The benchmark suite's target settings for the world, at another top speed and duration.
-TargetSettings target_settings(DemonstrationWorld world, double max_speed, double duration) {
-  const std::optional<SuiteSpec> suite =
-      find_suite(world == DemonstrationWorld::dynamic ? "dynamic-1.5ms" : "static-1ms");
-  if (!suite) throw std::logic_error("demonstrations: benchmark suites are missing");
-  TargetSettings t = suite->target;
-  t.max_speed = max_speed;
-  t.min_speed = std::min(t.min_speed, max_speed);
-  t.duration = duration;
-  return t;
+/// Episode `seed`'s scenario: the kind's world (generated from the seed, or the paper's fixed layout) and a
+/// target path drawn from the seed like the source suite's, at top speed `speed`. Throws std::runtime_error
+/// when the generator cannot place the obstacles or the path.
+core::Scenario demonstration_scenario(const DemonstrationSettings& s, DemonstrationWorld world, double speed,
+                                      std::uint64_t seed, const std::string& name) {
+  const bool teleop = teleop_target(s, world);
+  auto [suite, source] = source_world(world, teleop);
+  const core::Scenario layout = source.fixed ? *source.fixed : generate_world(source.settings, seed);
+  TargetSettings t = suite.target;
+  if (teleop) {
+    // The suite's area, re-calibrated for this speed (its style depends on the nominal speed).
+    t = teleop_target_in(WorldArea{t.area_width, t.area_height, t.area_center_x, t.area_center_y}, speed,
+                         s.duration);
+  } else {
+    t.max_speed = speed;
+    t.min_speed = std::min(t.min_speed, speed);
+    t.duration = s.duration;
+  }
+  return generate_episode(layout, t, seed, name);
 }
 
 }  // namespace
@@ -84,7 +128,8 @@ bool DemonstrationSettings::validate(std::string* error) const {
         << ", which meet the benchmark's seeds " << kBenchmarkSeedMin << "-" << kBenchmarkSeedMax
         << " (sim::is_benchmark_seed); training data must come from other worlds, e.g. first_seed 5000";
   } else if (worlds.empty()) {
-    why << "worlds must not be empty (forest, boxes, mixed, dynamic)";
+    why << "worlds must not be empty (forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, sixwall-sliding, "
+           "random)";
   } else if (target_speeds.empty()) {
     why << "target_speeds must not be empty";
   } else if (auto bad = std::find_if(target_speeds.begin(), target_speeds.end(),
@@ -95,6 +140,11 @@ bool DemonstrationSettings::validate(std::string* error) const {
     why << "duration (" << duration << ") must be in (0, 36000] seconds";
   } else if (label_every < 1) {
     why << "label_every (" << label_every << ") must be at least 1";
+  } else if (episode.latency_ms && !(*episode.latency_ms < episode.planning_period * 1000.0)) {
+    // Demonstrations label every planning cycle they are asked to: a latency of a period or more would skip
+    // cycles, and the recorder's label_every would no longer count planning periods.
+    why << "episode.latency_ms (" << *episode.latency_ms << ") must be below one planning period ("
+        << episode.planning_period * 1000.0 << " ms) in demonstrations";
   } else if (driver.empty()) {
     why << "driver must be \"expert\" or a planner name";
   } else if (jobs < 1 || jobs > 4096) {
@@ -156,6 +206,7 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                       {"band", {s.expert.ranking.band.min, s.expert.ranking.band.reference, s.expert.ranking.band.max}}}}};
   // `jobs` is left out on purpose: it does not change the rows, and the file should not change with it.
   const json generator{{"world_kinds", kinds},
+                       {"target", to_string(s.target)},
                        {"first_seed", s.first_seed},
                        {"episodes", s.episodes},
                        {"duration", s.duration},
@@ -167,7 +218,14 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                                  "world kind worlds[i % W], target speed target_speeds[(i / W) % S]"},
                        {"physics_step", s.episode.physics_step},
                        {"planning_period", s.episode.planning_period},
-                       {"robot_accel_max", s.episode.robot_accel_max}};
+                       {"robot_accel_max", s.episode.robot_accel_max},
+                       {"latency_ms", s.episode.latency_ms ? json(*s.episode.latency_ms) : json(nullptr)},
+                       {"tau", s.episode.tau},
+                       {"beams", s.episode.beams ? json(*s.episode.beams) : json(nullptr)},
+                       {"lidar_noise", s.episode.lidar_noise ? json(*s.episode.lidar_noise) : json(nullptr)},
+                       {"target_noise", {s.episode.target_position_noise, s.episode.target_velocity_noise}},
+                       {"driver_shield", s.driver != "expert" && s.driver_options.shield},
+                       {"response_time", s.driver_options.response_time}};
   return {{"format", io::kDatasetFormat},
           {"projection", io::projection_settings_json(s.expert.projection)},
           {"perception", perception_json(s.expert.perception).dump()},
@@ -216,7 +274,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   const bool expert_drives = settings.driver == "expert";
   auto make_driver = [&](std::uint64_t seed) -> std::unique_ptr<planners::Planner> {
     if (expert_drives) return nullptr;
-    planners::PlannerOptions options;
+    planners::PlannerOptions options = settings.driver_options;
     options.seed = seed;
     options.threads = 1;
     options.model = settings.model;
@@ -261,8 +319,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
       try {
         core::Scenario scenario;
         try {
-          const core::Scenario world = generate_world(world_settings(kind), seed);
-          scenario = generate_episode(world, target_settings(kind, speed, settings.duration), seed, name);
+          scenario = demonstration_scenario(settings, kind, speed, seed, name);
         } catch (const std::runtime_error& e) {  // the generator could not place obstacles or a path: skip
           const std::lock_guard<std::mutex> guard(lock);
           ++report.episodes_failed;
@@ -274,6 +331,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
         }
         planners::ProjCemSettings expert_settings = settings.expert;
         expert_settings.seed = seed;
+        if (expert_drives) expert_settings.response_time = settings.driver_options.response_time;
         DemonstrationRecorder recorder(std::make_unique<planners::ProjCem>(expert_settings), make_driver(seed),
                                        settings.label_every);
         EpisodeSettings episode = settings.episode;

@@ -52,12 +52,25 @@ namespace occtrack::sim {
 /// Columns of `observation` (the dataset file's, io/dataset_file.hpp).
 using io::kObservationSize;
 
-/// The worlds demonstrations are drawn in: the benchmark suites' world settings (benchmark_suites()) with
-/// other seeds. `dynamic` is the dynamic-1.5ms suite's mixed world with 6 moving obstacles.
-enum class DemonstrationWorld { forest, boxes, mixed, dynamic };
+/// The worlds demonstrations are drawn in. The generated kinds take the benchmark suites' world settings
+/// (benchmark_suites(), benchmark_suites_v2()) with other seeds: forest, boxes and mixed are the static suites'
+/// worlds, `dynamic` the dynamic-1.5ms suite's mixed world with 6 moving obstacles, `clutter-dynamic` the
+/// clutter-dynamic-2ms suite's (the same, its obstacles at 1 m/s). The paper's worlds are fixed layouts
+/// (sim/paper_worlds.hpp), as in the v2 suites: `sixwall`, `sixwall-sliding` (its walls move) and `random`;
+/// there, only the target's path and the noise change with the seed.
+enum class DemonstrationWorld { forest, boxes, mixed, dynamic, clutter_dynamic, sixwall, sixwall_sliding, random };
 const char* to_string(DemonstrationWorld world);
-/// "forest", "boxes", "mixed" or "dynamic"; nullopt otherwise.
+/// "forest", "boxes", "mixed", "dynamic", "clutter-dynamic", "sixwall", "sixwall-sliding" or "random";
+/// nullopt otherwise.
 std::optional<DemonstrationWorld> parse_demonstration_world(std::string_view text);
+
+/// How the demonstrations' target moves: `smooth`, the v1 suites' generator (TargetMotion::smooth), or
+/// `teleop`, the v2 suites' virtual tele-operator calibrated for each top speed (sim::teleop_target_in, over
+/// the area of the v2 suite that holds the world). The paper's worlds always use `teleop`, as their suites do.
+enum class DemonstrationTarget { smooth, teleop };
+const char* to_string(DemonstrationTarget target);
+/// "smooth" or "teleop"; nullopt otherwise.
+std::optional<DemonstrationTarget> parse_demonstration_target(std::string_view text);
 
 struct DemonstrationSettings {
   /// Closed-loop episodes, each in a world of its own. Episode i uses world kind worlds[i % W] and target top
@@ -69,6 +82,7 @@ struct DemonstrationSettings {
   std::vector<DemonstrationWorld> worlds = {DemonstrationWorld::forest, DemonstrationWorld::boxes,
                                             DemonstrationWorld::mixed, DemonstrationWorld::dynamic};
   std::vector<double> target_speeds = {1.0, 1.5, 2.0};  ///< m/s, the target's top speed
+  DemonstrationTarget target = DemonstrationTarget::smooth;
   double duration = 40.0;  ///< simulated seconds per episode
   /// Label one planning cycle in this many (the first cycle of an episode is always labelled).
   int label_every = 1;
@@ -77,11 +91,15 @@ struct DemonstrationSettings {
   /// in which case the expert runs only on labelled cycles, next to the driver.
   std::string driver = "expert";
   std::string model;  ///< driver's model file (learned planners; empty: the shipped model)
+  /// The driver's other options (shield, response time, latency, ...): its seed, threads and model are
+  /// replaced by the episode's seed, 1 and `model`.
+  planners::PlannerOptions driver_options;
   /// The labelling expert. Its seed is replaced by each episode's seed; its projection runs on one thread
   /// (episodes run in parallel instead).
   planners::ProjCemSettings expert = planners::ProjCemSettings::offline_expert(1);
-  /// Physics, planning period and band of every episode; its `seed` (sensor noise) is replaced by the
-  /// episode's seed. Snapshots and trace are not needed here and are thinned out.
+  /// Physics, planning period, band and Protocol v2 (latency, robot lag, sensor and target noise) of every
+  /// episode; its `seed` (sensor noise) is replaced by the episode's seed. `beams` and `lidar_noise` override
+  /// the sensor of every episode's scenario. Snapshots and trace are not needed here and are thinned out.
   EpisodeSettings episode;
   /// Episodes run at the same time, each on its own thread with its own planners. Does not change the result.
   int jobs = 1;
