@@ -202,7 +202,8 @@ std::optional<LossTerms> Trainer::validate() {
   return sum / static_cast<double>(rows.numel());
 }
 
-TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>& progress) {
+TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>& progress,
+                             const std::function<void(int64_t, const LossTerms&)>& after_step) {
   TrainingSummary summary;
   const auto start = Clock::now();
   const double elapsed_before = elapsed_seconds_;
@@ -229,6 +230,7 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
       save_checkpoint(settings_.checkpoint_path);
       pending.checkpoint = settings_.checkpoint_path;
     }
+    if (after_step) after_step(step_, terms);
     const double since = seconds_since(report_time);
     if (progress && (since >= settings_.progress_seconds || last)) {
       const int64_t done = step_ - report_step;

@@ -129,7 +129,10 @@ class Trainer {
   /// are none. Reseeds torch's generators (the next step() reseeds them again).
   std::optional<LossTerms> validate();
   /// Steps until settings.steps, with progress reports, validation and checkpoints as set.
-  TrainingSummary run(const std::function<void(const TrainingProgress&)>& progress = {});
+  /// `after_step`, when set, is called after every step (its validation and checkpoint done) with the step
+  /// index and its loss terms: for snapshots of the model while it trains.
+  TrainingSummary run(const std::function<void(const TrainingProgress&)>& progress = {},
+                      const std::function<void(int64_t, const LossTerms&)>& after_step = {});
 
   /// Model, optimizer, step, elapsed time and the settings that must not change on resume.
   void save_checkpoint(const std::string& path) const;

@@ -1,6 +1,7 @@
 // occtrack train --data FILE [--data FILE ...] --out MODEL.safetensors [--variant cvae|bc|fixed-q]
 //                [--steps N] [--batch B] [--lr LR] [--beta BETA] [--iterations K] [--device cpu|cuda]
 //                [--threads T] [--seed S] [--checkpoint FILE] [--checkpoint-every N] [--resume FILE]
+//                [--snapshot-every N]
 //                [--hidden H] [--layers L] [--features F] [--pointnet-hidden HP] [--pointnet-widths W,...]
 //                [--latent Z] [--dropout P] [--validation-share S] [--validation-every N] [--plain-projection]
 //
@@ -8,6 +9,7 @@
 // writes the model file. Progress (step, loss terms, steps/s, ETA) goes to standard error every few
 // seconds; the summary to standard output.
 #include <cstdio>
+#include <deque>
 #include <iostream>
 #include <sstream>
 
@@ -29,8 +31,19 @@ struct TrainOptions {
   std::string frame = "target";  // measured better than robot (docs/learning.md, "Target frame")
   std::string resume;
   int threads = 0;
+  int64_t snapshot_every = 0;  ///< write the model every this many steps beside --out (0: only at the end)
   learning::TrainingSettings settings;
 };
+
+/// Where the snapshot of `step` goes: --out with ".stepN" before its extension (model.safetensors ->
+/// model.step1000.safetensors).
+std::string snapshot_path(const std::string& out, int64_t step) {
+  const std::string::size_type slash = out.find_last_of('/');
+  const std::string::size_type dot = out.find_last_of('.');
+  const bool has_extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  const std::string stem = has_extension ? out.substr(0, dot) : out;
+  return stem + ".step" + std::to_string(step) + (has_extension ? out.substr(dot) : ".safetensors");
+}
 
 std::string duration_text(double seconds) {
   const long s = static_cast<long>(seconds + 0.5);
@@ -69,6 +82,7 @@ std::string canonical_command(const TrainOptions& o) {
   if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
   if (s.plain_projection) c << " --plain-projection";
   if (!o.resume.empty()) c << " --resume " << o.resume;
+  if (o.snapshot_every > 0) c << " --snapshot-every " << o.snapshot_every;
   return c.str();
 }
 
@@ -100,6 +114,7 @@ int run(TrainOptions o) {
                  static_cast<long long>(trainer.current_step()));
   }
 
+  std::deque<learning::LossTerms> recent;
   const learning::TrainingSummary summary = trainer.run([&](const learning::TrainingProgress& p) {
     std::string line = "step " + std::to_string(p.step) + "/" + std::to_string(p.steps) + "  " + loss_text(p.loss);
     char rate[96];
@@ -110,6 +125,22 @@ int run(TrainOptions o) {
     if (!p.checkpoint.empty()) line += "  | checkpoint " + p.checkpoint;
     std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
+  }, [&](int64_t step, const learning::LossTerms& terms) {
+    // Snapshots for choosing a model in closed loop (docs/learning.md, "Choosing the model"): each a complete
+    // model file, its metadata as at that step (loss: the mean of the last up to 100 steps).
+    recent.push_back(terms);
+    if (recent.size() > 100) recent.pop_front();
+    if (o.snapshot_every <= 0 || step % o.snapshot_every != 0 || step >= o.settings.steps) return;
+    learning::TrainingSummary at;
+    at.steps = step;
+    at.seconds = trainer.elapsed_seconds();
+    for (const learning::LossTerms& t : recent) at.final_loss += t;
+    at.final_loss = at.final_loss / static_cast<double>(recent.size());
+    at.validation = trainer.validate();
+    const std::string path = snapshot_path(o.out, step);
+    learning::export_model(path, *trainer.model(), trainer.model_metadata(at, created_by(canonical_command(o))));
+    std::fprintf(stderr, "%ssnapshot at step %lld: %s%s\n", who, static_cast<long long>(step), path.c_str(),
+                 at.validation ? ("  validation " + loss_text(*at.validation)).c_str() : "");
   });
 
   learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by(canonical_command(o))));
@@ -160,6 +191,10 @@ void add_train_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--checkpoint-every", s.checkpoint_every, "Steps between checkpoints")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--snapshot-every", o->snapshot_every,
+                  "Also write the model every this many steps, as OUT with .stepN before the extension, for "
+                  "choosing one in closed loop (scripts/validate_models.sh; 0: none)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--resume", o->resume,
                   "Continue from this checkpoint (same data, variant, sizes, batch, seed and K); new checkpoints "
                   "go to --checkpoint, or to this file");
