@@ -297,6 +297,15 @@ TEST(Demonstrations, V2EpisodesInThePaperWorldsWithTeleopTargetsLatencyAndAShiel
   ASSERT_GT(smooth_rows.rows, 0);
   ASSERT_GT(teleop_rows.rows, 0);
   EXPECT_NE(smooth_rows.observation, teleop_rows.observation);
+  // With a tele-operated target, `dynamic` keeps dynamic-1.5ms's world (obstacles at 0.7 m/s) and
+  // `clutter-dynamic` is clutter-dynamic-2ms's (1 m/s): the same seed, two worlds.
+  forest.worlds = {sim::DemonstrationWorld::dynamic};
+  const sim::Demonstrations slow_rows = sim::generate_demonstrations(forest);
+  forest.worlds = {sim::DemonstrationWorld::clutter_dynamic};
+  const sim::Demonstrations fast_rows = sim::generate_demonstrations(forest);
+  ASSERT_GT(slow_rows.rows, 0);
+  ASSERT_GT(fast_rows.rows, 0);
+  EXPECT_NE(slow_rows.obstacles, fast_rows.obstacles);
 
   for (auto world : {sim::DemonstrationWorld::forest, sim::DemonstrationWorld::clutter_dynamic,
                      sim::DemonstrationWorld::sixwall_sliding, sim::DemonstrationWorld::random})

@@ -55,24 +55,29 @@ std::optional<DemonstrationTarget> parse_demonstration_target(std::string_view t
 
 namespace {
 
-/// Where a kind's world and target come from: the benchmark suite that holds it (v1 for the smooth target,
-/// v2 for the tele-operated one) and, in a suite of several worlds, the kind of generated world to take.
+/// Where a kind's world and target come from: the benchmark suite whose world it is (in a suite of several
+/// worlds, the generated one of `kind`), and the suites whose target settings it takes with a smooth (v1)
+/// and a tele-operated (v2) target.
 struct WorldSource {
+  const char* world_suite;
+  std::optional<WorldKind> kind;
   const char* smooth_suite;  ///< nullptr: the kind has no smooth-target version (the paper's worlds)
   const char* teleop_suite;
-  std::optional<WorldKind> kind;
 };
 
 WorldSource world_source(DemonstrationWorld world) {
   switch (world) {
-    case DemonstrationWorld::forest: return {"static-1ms", "clutter-2ms", WorldKind::forest};
-    case DemonstrationWorld::boxes: return {"static-1ms", "clutter-2ms", WorldKind::boxes};
-    case DemonstrationWorld::mixed: return {"static-1ms", "clutter-2ms", WorldKind::mixed};
-    case DemonstrationWorld::dynamic: return {"dynamic-1.5ms", "clutter-dynamic-2ms", std::nullopt};
-    case DemonstrationWorld::clutter_dynamic: return {nullptr, "clutter-dynamic-2ms", std::nullopt};
-    case DemonstrationWorld::sixwall: return {nullptr, "sixwall-1ms", std::nullopt};
-    case DemonstrationWorld::sixwall_sliding: return {nullptr, "sixwall-dynamic-1.5ms", std::nullopt};
-    case DemonstrationWorld::random: return {nullptr, "random-2ms", std::nullopt};
+    case DemonstrationWorld::forest: return {"static-1ms", WorldKind::forest, "static-1ms", "clutter-2ms"};
+    case DemonstrationWorld::boxes: return {"static-1ms", WorldKind::boxes, "static-1ms", "clutter-2ms"};
+    case DemonstrationWorld::mixed: return {"static-1ms", WorldKind::mixed, "static-1ms", "clutter-2ms"};
+    case DemonstrationWorld::dynamic:
+      return {"dynamic-1.5ms", std::nullopt, "dynamic-1.5ms", "clutter-dynamic-2ms"};
+    case DemonstrationWorld::clutter_dynamic:
+      return {"clutter-dynamic-2ms", std::nullopt, nullptr, "clutter-dynamic-2ms"};
+    case DemonstrationWorld::sixwall: return {"sixwall-1ms", std::nullopt, nullptr, "sixwall-1ms"};
+    case DemonstrationWorld::sixwall_sliding:
+      return {"sixwall-dynamic-1.5ms", std::nullopt, nullptr, "sixwall-dynamic-1.5ms"};
+    case DemonstrationWorld::random: return {"random-2ms", std::nullopt, nullptr, "random-2ms"};
   }
   throw std::logic_error("demonstrations: unknown world kind");
 }
@@ -81,13 +86,16 @@ bool teleop_target(const DemonstrationSettings& s, DemonstrationWorld world) {
   return s.target == DemonstrationTarget::teleop || world_source(world).smooth_suite == nullptr;
 }
 
-/// The suite and its world that an episode of this kind is drawn like.
-std::pair<SuiteSpec, SuiteWorld> source_world(DemonstrationWorld world, bool teleop) {
-  const WorldSource source = world_source(world);
-  const std::optional<SuiteSpec> suite = find_suite(teleop ? source.teleop_suite : source.smooth_suite);
+SuiteSpec benchmark_suite(const char* name) {
+  std::optional<SuiteSpec> suite = find_suite(name);
   if (!suite || suite->worlds.empty()) throw std::logic_error("demonstrations: benchmark suites are missing");
-  for (const SuiteWorld& w : suite->worlds)
-    if (!source.kind || (!w.fixed && w.settings.style.kind == *source.kind)) return {*suite, w};
+  return *suite;
+}
+
+/// The benchmark world an episode of this kind is drawn like.
+SuiteWorld source_world(const WorldSource& source) {
+  for (const SuiteWorld& w : benchmark_suite(source.world_suite).worlds)
+    if (!source.kind || (!w.fixed && w.settings.style.kind == *source.kind)) return w;
   throw std::logic_error("demonstrations: no benchmark world of this kind");
 }
 
@@ -97,9 +105,10 @@ std::pair<SuiteSpec, SuiteWorld> source_world(DemonstrationWorld world, bool tel
 core::Scenario demonstration_scenario(const DemonstrationSettings& s, DemonstrationWorld world, double speed,
                                       std::uint64_t seed, const std::string& name) {
   const bool teleop = teleop_target(s, world);
-  auto [suite, source] = source_world(world, teleop);
+  const WorldSource where = world_source(world);
+  const SuiteWorld source = source_world(where);
   const core::Scenario layout = source.fixed ? *source.fixed : generate_world(source.settings, seed);
-  TargetSettings t = suite.target;
+  TargetSettings t = benchmark_suite(teleop ? where.teleop_suite : where.smooth_suite).target;
   if (teleop) {
     // The suite's area, re-calibrated for this speed (its style depends on the nominal speed).
     t = teleop_target_in(WorldArea{t.area_width, t.area_height, t.area_center_x, t.area_center_y}, speed,
