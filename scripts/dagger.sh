@@ -3,7 +3,7 @@
 #   round 0   the offline expert drives and labels every cycle;
 #   round r   the cvae model trained on rounds 0 .. r-1 drives (through the safety layer) and the expert labels
 #             every cycle of the states the policy itself reaches;
-#   last      the three variants trained side by side on every round (scripts/train_models.sh).
+#   last      the final models trained on every round (scripts/train_models.sh), with snapshots.
 # Every episode: the paper's worlds and occtrack's (sixwall, sixwall-sliding, random, forest, boxes, mixed,
 # clutter-dynamic, dynamic) in turn, tele-operated targets at top speeds 1, 1.5, 2 and 2.5 m/s, the v2 sensing
 # (360 beams, range noise 0.01 m, target noise 0.05 m and 0.1 m/s), robot lag 0.25 s and a 20 ms latency,
@@ -17,8 +17,10 @@
 #   ROUNDS        DAgger rounds after round 0 [2]
 #   EPISODES      episodes per round [32]; DURATION0, DURATION: their simulated seconds [40, 30]
 #   JOBS          labelling threads [all cores]
-#   ROUND_STEPS   training steps of each round's cvae [1500]
-#   STEPS, BC_STEPS, BATCH, MAX_MINUTES, THREADS   the final training (scripts/train_models.sh) [3000, 6000, 256, none, 1]
+#   ROUND_STEPS   training steps of each round's cvae [1200]
+#   VARIANTS      the final models, side by side: any of cvae bc fixed-q [cvae]
+#   STEPS, BC_STEPS, BATCH, MAX_MINUTES, THREADS, SNAPSHOT_EVERY   the final training (scripts/train_models.sh)
+#                 [2000, 8000, 256, none, all cores, 500]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=${1:-cpu}
@@ -28,7 +30,7 @@ models=${MODELS:-$data/final}
 rounds=${ROUNDS:-2}
 episodes=${EPISODES:-32}
 jobs=${JOBS:-$(nproc)}
-round_steps=${ROUND_STEPS:-1500}
+round_steps=${ROUND_STEPS:-1200}
 export OPENBLAS_NUM_THREADS=1
 mkdir -p "$data" "$models"
 [ -x "$occtrack" ] || { echo "dagger.sh: no occtrack binary at $occtrack (build with LibTorch first)" >&2; exit 2; }
@@ -64,8 +66,10 @@ for (( r = 1; r <= rounds; r++ )); do
 done
 echo "dagger.sh: data done after $(( ($(date +%s) - start) / 60 )) min" >&2
 
-# The final variants on every round's rows, side by side (train_models.sh trains on $DATA/demo-*.safetensors).
-OCCTRACK="$occtrack" DATA="$data" MODELS="$models" CHUNKS=0 STEPS="${STEPS:-3000}" BC_STEPS="${BC_STEPS:-6000}" \
-  BATCH="${BATCH:-256}" MAX_MINUTES="${MAX_MINUTES:-100000}" THREADS="${THREADS:-1}" FRAME=target \
-  scripts/train_models.sh "$device" cvae bc fixed-q
+# The final models on every round's rows (train_models.sh trains on $DATA/demo-*.safetensors), with snapshots
+# for choosing one in closed loop: scripts/validate_models.sh $MODELS/cvae*.safetensors. VARIANTS run side by
+# side, THREADS torch threads each.
+OCCTRACK="$occtrack" DATA="$data" MODELS="$models" CHUNKS=0 STEPS="${STEPS:-2000}" BC_STEPS="${BC_STEPS:-8000}" \
+  BATCH="${BATCH:-256}" MAX_MINUTES="${MAX_MINUTES:-100000}" THREADS="${THREADS:-$jobs}" FRAME=target \
+  SNAPSHOT_EVERY="${SNAPSHOT_EVERY:-500}" scripts/train_models.sh "$device" ${VARIANTS:-cvae}
 echo "dagger.sh: done after $(( ($(date +%s) - start) / 60 )) min; models in $models" >&2

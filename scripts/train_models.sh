@@ -20,6 +20,7 @@
 #   MAX_MINUTES     stop each training after this many minutes and write the model (0: no limit) [0]
 #   THREADS         torch CPU threads per training [1]
 #   FRAME           what the networks see: robot or target (docs/learning.md, "Target frame") [target]
+#   SNAPSHOT_EVERY  also write each model every this many steps, for scripts/validate_models.sh [0: none]
 # Every dataset file in DATA named demo-*.safetensors is trained on, older ones included.
 #
 # The shipped models were made on the 2-core dev machine, no GPU, from the 6400 rows of demo-a and demo-b
@@ -68,7 +69,8 @@ for variant in "${variants[@]}"; do
   "$occtrack" train "${files[@]}" --variant "$variant" --device "$device" --threads "${THREADS:-1}" --seed 1 \
     --frame "${FRAME:-target}" --steps "$variant_steps" --batch "${BATCH:-512}" --iterations "${ITERATIONS:-20}" --lr "${LR:-1e-3}" \
     --lr-final "${LR_FINAL:-1e-4}" --max-minutes "${MAX_MINUTES:-100000}" --out "$models/$variant.safetensors" \
-    --checkpoint "$data/$variant.checkpoint" --progress-seconds 30 > "$data/train-$variant.log" 2>&1 &
+    --checkpoint "$data/$variant.checkpoint" --snapshot-every "${SNAPSHOT_EVERY:-0}" --progress-seconds 30 \
+    > "$data/train-$variant.log" 2>&1 &
 done
 wait
 tail -n 3 "$data"/train-*.log
