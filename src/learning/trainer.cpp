@@ -202,8 +202,20 @@ std::optional<LossTerms> Trainer::validate() {
   return sum / static_cast<double>(rows.numel());
 }
 
+namespace {
+
+/// The mean of the last (up to 100) steps' loss terms: a summary's final_loss.
+LossTerms recent_mean(const std::vector<LossTerms>& history) {
+  const std::size_t tail = std::min<std::size_t>(100, history.size());
+  LossTerms sum;
+  for (std::size_t i = history.size() - tail; i < history.size(); ++i) sum += history[i];
+  return tail > 0 ? sum / static_cast<double>(tail) : sum;
+}
+
+}  // namespace
+
 TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>& progress,
-                             const std::function<void(int64_t, const LossTerms&)>& after_step) {
+                             const std::function<void(int64_t, const TrainingSummary&)>& after_step) {
   TrainingSummary summary;
   const auto start = Clock::now();
   const double elapsed_before = elapsed_seconds_;
@@ -230,7 +242,12 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
       save_checkpoint(settings_.checkpoint_path);
       pending.checkpoint = settings_.checkpoint_path;
     }
-    if (after_step) after_step(step_, terms);
+    if (after_step) {
+      summary.steps = step_;
+      summary.seconds = elapsed_seconds_;
+      summary.final_loss = recent_mean(summary.history);
+      after_step(step_, summary);
+    }
     const double since = seconds_since(report_time);
     if (progress && (since >= settings_.progress_seconds || last)) {
       const int64_t done = step_ - report_step;
@@ -250,10 +267,7 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
   }
   summary.steps = step_;
   summary.seconds = elapsed_seconds_;
-  const std::size_t tail = std::min<std::size_t>(100, summary.history.size());
-  for (std::size_t i = summary.history.size() - tail; i < summary.history.size(); ++i)
-    summary.final_loss += summary.history[i];
-  if (tail > 0) summary.final_loss = summary.final_loss / static_cast<double>(tail);
+  summary.final_loss = recent_mean(summary.history);
   if (summary.history.empty()) summary.validation = validate();  // resumed at the end: nothing ran
   return summary;
 }

@@ -130,9 +130,10 @@ class Trainer {
   std::optional<LossTerms> validate();
   /// Steps until settings.steps, with progress reports, validation and checkpoints as set.
   /// `after_step`, when set, is called after every step (its validation and checkpoint done) with the step
-  /// index and its loss terms: for snapshots of the model while it trains.
+  /// index and the summary so far (history, and final_loss over its last steps): for snapshots of the model
+  /// while it trains.
   TrainingSummary run(const std::function<void(const TrainingProgress&)>& progress = {},
-                      const std::function<void(int64_t, const LossTerms&)>& after_step = {});
+                      const std::function<void(int64_t, const TrainingSummary&)>& after_step = {});
 
   /// Model, optimizer, step, elapsed time and the settings that must not change on resume.
   void save_checkpoint(const std::string& path) const;

@@ -9,7 +9,6 @@
 // writes the model file. Progress (step, loss terms, steps/s, ETA) goes to standard error every few
 // seconds; the summary to standard output.
 #include <cstdio>
-#include <deque>
 #include <iostream>
 #include <sstream>
 
@@ -114,7 +113,6 @@ int run(TrainOptions o) {
                  static_cast<long long>(trainer.current_step()));
   }
 
-  std::deque<learning::LossTerms> recent;
   const learning::TrainingSummary summary = trainer.run([&](const learning::TrainingProgress& p) {
     std::string line = "step " + std::to_string(p.step) + "/" + std::to_string(p.steps) + "  " + loss_text(p.loss);
     char rate[96];
@@ -125,17 +123,14 @@ int run(TrainOptions o) {
     if (!p.checkpoint.empty()) line += "  | checkpoint " + p.checkpoint;
     std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
-  }, [&](int64_t step, const learning::LossTerms& terms) {
+  }, [&](int64_t step, const learning::TrainingSummary& so_far) {
     // Snapshots for choosing a model in closed loop (docs/learning.md, "Choosing the model"): each a complete
-    // model file, its metadata as at that step (loss: the mean of the last up to 100 steps).
-    recent.push_back(terms);
-    if (recent.size() > 100) recent.pop_front();
+    // model file, its metadata as at that step.
     if (o.snapshot_every <= 0 || step % o.snapshot_every != 0 || step >= o.settings.steps) return;
     learning::TrainingSummary at;
-    at.steps = step;
-    at.seconds = trainer.elapsed_seconds();
-    for (const learning::LossTerms& t : recent) at.final_loss += t;
-    at.final_loss = at.final_loss / static_cast<double>(recent.size());
+    at.steps = so_far.steps;
+    at.seconds = so_far.seconds;
+    at.final_loss = so_far.final_loss;
     at.validation = trainer.validate();
     const std::string path = snapshot_path(o.out, step);
     learning::export_model(path, *trainer.model(), trainer.model_metadata(at, created_by(canonical_command(o))));
