@@ -3,16 +3,32 @@
 # present are left alone, and nothing is downloaded when nothing is missing. Needs root (uses sudo if not).
 set -euo pipefail
 
-packages=(
+# `setup.sh run` installs only what the main job needs (the command-line tool and the Eigen-only library);
+# `setup.sh` alone installs everything: training, tests, benchmarks, fuzzers, Python, ROS and the browser test.
+runtime_packages=(
   build-essential cmake ninja-build pkg-config  # compiler and build
   libeigen3-dev                                  # linear algebra (run-time library)
   nlohmann-json3-dev libyaml-cpp-dev             # case, result and scenario files
   libcli11-dev                                   # command line
+)
+test_packages=(
   libgtest-dev googletest libbenchmark-dev       # tests and benchmarks
   python3                                        # the command-line tests edit JSON files with it
   libtorch-dev libopenblas0-pthread              # training (src/learning); OpenBLAS: ~20x faster than reference BLAS
   clang-14 libclang-rt-14-dev                    # the fuzz targets (fuzz/, libFuzzer); CI runs them
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python (python/), tests, plot
+  chromium                                       # the HTML replay's browser test (headless)
 )
+ros_packages=(  # the ROS 1 node (ros/) and its closed-loop test against a real roscore
+  libroscpp-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libvisualization-msgs-dev
+  python3-roslaunch rosout
+)
+
+case "${1:-all}" in
+  run) packages=("${runtime_packages[@]}") ;;
+  all) packages=("${runtime_packages[@]}" "${test_packages[@]}" "${ros_packages[@]}") ;;
+  *) echo "usage: $0 [run|all]   (run: only what the main job needs; all, the default: everything)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -88,16 +88,8 @@ void print_summary(const std::string& what, const Summary& s) {
 
 void generate_suite(const sim::SuiteSpec& spec, const std::filesystem::path& root, Summary& total) {
   Summary summary;
-  for (std::size_t w = 0; w < spec.worlds.size(); ++w) {
-    const sim::SuiteWorld& world_spec = spec.worlds[w];
-    const core::Scenario world = sim::suite_world(world_spec);
-    for (int e = 1; e <= spec.episodes_of(w); ++e) {
-      const std::string name = world_spec.name + "-" + std::to_string(e);
-      const core::Scenario s =
-          sim::generate_episode(world, spec.target, spec.episode_seed(static_cast<int>(w), e), name);
-      write_scenario(s, root / spec.name / (name + ".yaml"), summary);
-    }
-  }
+  for (const core::Scenario& s : sim::suite_scenarios(spec))
+    write_scenario(s, root / spec.name / (s.name + ".yaml"), summary);
   print_summary(spec.name, summary);
   total.files += summary.files;
   total.bytes += summary.bytes;

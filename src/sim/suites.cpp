@@ -67,6 +67,18 @@ core::Scenario suite_world(const SuiteWorld& world) {
   return world.fixed ? *world.fixed : generate_world(world.settings, world.seed);
 }
 
+std::vector<core::Scenario> suite_scenarios(const SuiteSpec& spec) {
+  std::vector<core::Scenario> episodes;
+  for (std::size_t w = 0; w < spec.worlds.size(); ++w) {
+    const SuiteWorld& world_spec = spec.worlds[w];
+    const core::Scenario world = suite_world(world_spec);
+    for (int e = 1; e <= spec.episodes_of(w); ++e)
+      episodes.push_back(generate_episode(world, spec.target, spec.episode_seed(static_cast<int>(w), e),
+                                          world_spec.name + "-" + std::to_string(e)));
+  }
+  return episodes;
+}
+
 Vec2 leash_position(const Vec2& robot, const Vec2& target, double distance) {
   const Vec2 offset = target - robot;
   const double gap = offset.norm();

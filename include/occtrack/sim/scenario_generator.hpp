@@ -254,5 +254,7 @@ std::vector<SuiteSpec> benchmark_suites();
 std::vector<SuiteSpec> benchmark_suites_v2();
 /// A suite of either list by name.
 std::optional<SuiteSpec> find_suite(std::string_view name);
+/// The suite's episodes, world by world, named "<world>-<k>" (the scenario files' stems).
+std::vector<core::Scenario> suite_scenarios(const SuiteSpec& spec);
 
 }  // namespace occtrack::sim

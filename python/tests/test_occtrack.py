@@ -1,0 +1,155 @@
+"""The Python module against the library: planners, episodes, scenarios, files, and errors that name the
+bad argument. Run by ctest (python.pytest) with PYTHONPATH at the build's python/ folder."""
+import math
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+import occtrack
+
+SOURCE = pathlib.Path(os.environ.get("OCCTRACK_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+FOREST = SOURCE / "scenarios" / "static-1ms-smoke" / "forest-a-1.yaml"
+
+
+def open_scan(beams=360):
+    return np.full(beams, np.inf)
+
+
+def plan_once(planner, **override):
+    args = dict(robot_position=[0.0, 0.0], robot_velocity=[0.0, 0.0], target_position=[2.0, 0.0],
+                target_velocity=[0.5, 0.0], ranges=open_scan())
+    args.update(override)
+    return planner.plan(**args)
+
+
+def test_planner_names_include_the_papers_planners():
+    names = occtrack.planner_names()
+    for name in ("cvae", "projcem", "follower", "bc"):
+        assert name in names
+
+
+@pytest.mark.parametrize("name", ["follower", "cvae", "projcem"])
+def test_a_cycle_returns_a_finite_command_toward_a_target_in_the_open(name):
+    out = plan_once(occtrack.Planner(name, shield=False))
+    assert out["ok"], out["message"]
+    command = out["command"]
+    assert command.shape == (2,) and np.all(np.isfinite(command))
+    # The target is 2 m ahead on +x and moving away: every planner closes in, none backs off.
+    assert command[0] > 0.0
+    assert out["plan"].ndim == 2 and out["plan"].shape[1] == 2 and len(out["plan"]) > 1
+    assert np.all(np.isfinite(out["plan"]))
+
+
+def test_the_cvae_returns_its_candidates_as_one_array():
+    out = plan_once(occtrack.Planner("cvae", batch=5))
+    candidates = out["candidates"]
+    assert candidates.ndim == 3 and candidates.shape[2] == 2 and candidates.shape[0] >= 1
+    assert out["safety"] in ("plan", "alternative", "stop", "evasive", "best_effort", "brake")
+
+
+def test_the_shield_stops_short_of_a_wall_between_robot_and_target():
+    # A wall 0.6 m ahead across the whole front half: no plan toward the target can be certified at speed.
+    ranges = open_scan()
+    angles = np.arange(360) * 2 * math.pi / 360
+    front = np.cos(angles) > 0.2
+    ranges[front] = 0.6 / np.cos(angles[front])
+    out = plan_once(occtrack.Planner("follower", shield=True), robot_velocity=[1.5, 0.0], ranges=ranges)
+    assert np.all(np.isfinite(out["command"]))
+    assert out["command"][0] < 1.5  # it does not drive on into the wall
+
+
+@pytest.mark.parametrize("argument,value,message", [
+    ("robot_position", [0.0, 0.0, 0.0], "robot_position"),
+    ("robot_position", [float("nan"), 0.0], "robot_position"),
+    ("target_velocity", [0.0, float("inf")], "target_velocity"),
+    ("ranges", np.zeros((4, 4)), "ranges"),
+    ("ranges", np.array([]), "ranges"),
+    ("ranges", np.array([1.0, float("nan"), 2.0]), "beam 1"),
+    ("angle_increment", -0.1, "angle_increment"),
+])
+def test_a_bad_argument_raises_naming_it(argument, value, message):
+    planner = occtrack.Planner("follower")
+    with pytest.raises(ValueError, match=message):
+        plan_once(planner, **{argument: value})
+
+
+def test_an_unknown_planner_is_refused_with_the_known_names():
+    with pytest.raises(ValueError, match="nope"):
+        occtrack.Planner("nope")
+
+
+def test_settings_are_checked_with_the_command_lines_messages():
+    with pytest.raises(ValueError, match="--batch"):
+        occtrack.Planner("cvae", batch=0)
+    with pytest.raises(TypeError, match="colour"):
+        occtrack.Planner("cvae", colour="blue")
+    with pytest.raises(ValueError, match="--latency"):
+        occtrack.run_episode(FOREST, planner="follower", latency=-3)
+
+
+def test_run_episode_gives_the_specs_metrics_and_the_trace():
+    result = occtrack.run_episode(FOREST, planner="follower", tau=0.25, latency=20)
+    for key in ("scenario", "planner", "duration_s", "occlusion_time_s", "collisions", "min_clearance_m",
+                "compute_ms", "tracking_distance", "latency_ms"):
+        assert key in result
+    assert result["duration_s"] == pytest.approx(20.0)
+    assert result["latency_ms"] == pytest.approx(20.0)
+    trace = result["trace"]
+    n = len(trace["time"])
+    assert n > 100
+    assert trace["robot"].shape == (n, 2) and trace["target"].shape == (n, 2)
+    assert trace["occluded"].dtype == bool and trace["occluded"].shape == (n,)
+    # The trace and the metrics agree: the time hidden is the hidden samples' share of the episode.
+    hidden = trace["occluded"].mean() * result["duration_s"]
+    assert hidden == pytest.approx(result["occlusion_time_s"], abs=0.5)
+
+
+def test_run_episode_matches_the_command_line_bit_for_bit(tmp_path):
+    # The same episode twice gives the same metrics (the planners and the simulator are deterministic).
+    a = occtrack.run_episode(str(FOREST), planner="cvae", batch=5)
+    b = occtrack.run_episode(occtrack.load_scenario(FOREST), planner="cvae", batch=5)
+    for key in ("occlusion_time_s", "collisions", "min_clearance_m", "tracking_distance"):
+        assert a[key] == b[key]
+    np.testing.assert_array_equal(a["trace"]["robot"], b["trace"]["robot"])
+
+
+def test_scenarios_load_and_generate():
+    s = occtrack.load_scenario(FOREST)
+    assert s.name and s.duration == pytest.approx(20.0)
+    assert s.target.shape[1] == 3 and len(s.obstacles) > 0
+    again = occtrack.parse_scenario(s.to_yaml())
+    np.testing.assert_allclose(again.target, s.target)
+    suite = occtrack.suite_scenarios("static-1ms-smoke")
+    assert [x.name for x in suite][:1] == ["forest-a-1"]
+    assert suite[0].to_yaml() == s.to_yaml()  # the file in scenarios/ is the generator's
+    short = occtrack.suite_scenarios("static-1ms", seed=5000, episodes=1, duration=10)
+    assert all(x.duration == pytest.approx(10.0) for x in short)
+    with pytest.raises(ValueError, match="unknown suite"):
+        occtrack.suite_scenarios("no-such-suite")
+    with pytest.raises(ValueError, match="missing.yaml"):
+        occtrack.load_scenario("missing.yaml")
+
+
+def test_models_load_as_arrays():
+    tensors, metadata = occtrack.load_model(str(SOURCE / "models" / "cvae.safetensors"))
+    assert metadata["format"].startswith("occtrack.model")
+    assert len(tensors) > 4
+    assert all(isinstance(a, np.ndarray) and np.all(np.isfinite(a)) for a in tensors.values())
+    with pytest.raises(ValueError):
+        occtrack.load_dataset(str(SOURCE / "models" / "cvae.safetensors"))  # a model is not a dataset
+
+
+def test_datasets_load_as_arrays():
+    columns, metadata = occtrack.load_dataset(str(SOURCE / "tests" / "data" / "datasets" / "v1-sim.safetensors"))
+    assert metadata["format"] == "occtrack.dataset.v1"
+    rows = columns["observation"].shape[0]
+    assert rows > 0 and columns["observation"].shape == (rows, 6)
+    assert columns["expert_xi"].shape[0] == rows and columns["episode"].dtype in (np.int32, np.int64)
+
+
+def test_the_readme_shows_the_example_as_it_is():
+    example = (SOURCE / "python" / "examples" / "track.py").read_text()
+    readme = (SOURCE / "README.md").read_text()
+    assert "```python\n" + example + "```" in readme
