@@ -20,7 +20,7 @@ test_packages=(
   chromium                                       # the HTML replay's browser test (headless)
 )
 ros_packages=(  # the ROS 1 node (ros/) and its closed-loop test against a real roscore
-  libroscpp-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libvisualization-msgs-dev
+  libroscpp-dev libstd-msgs-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libvisualization-msgs-dev
   python3-roslaunch rosout
 )
 

@@ -93,7 +93,9 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
     predictor_.observe(input.time - input.target_age, input.target_position, input.target_velocity);
     Eigen::Vector2d position, velocity;
     predictor_.state_at(carried, position, velocity);
-    frame.target << position - input.robot_position, velocity;
+    // Segment by segment: GCC 12 misreads the comma initializer's AVX loads here (-Warray-bounds).
+    frame.target.head<2>() = position - input.robot_position;
+    frame.target.tail<2>() = velocity;
     predictor_.predict(carried, basis().times, frame.forecast.positions, forecast_sigma_);
     frame.forecast.positions.rowwise() -= input.robot_position.transpose();
     const double d2 = ranking_settings_.forecast_distance * ranking_settings_.forecast_distance;
