@@ -1,4 +1,5 @@
-// occtrack bench suite SUITE --planner NAME [--jobs J] [--json FILE] [--svg-dir DIR] [episode options]
+// occtrack bench suite SUITE --planner NAME [--jobs J] [--json FILE] [--svg-dir DIR] [--html-dir DIR]
+//                       [episode options]
 //
 // Runs every scenario of a suite (a folder of YAML files, or a name under scenarios/) with a planner, J
 // episodes at a time (suite_runner.hpp), and prints the paper-style table. Each episode's planner runs
@@ -17,7 +18,7 @@ namespace occtrack::app {
 namespace {
 
 struct SuiteOptions {
-  std::string suite, json_path, svg_dir;
+  std::string suite, json_path, svg_dir, html_dir;
   int jobs = 1;
   EpisodeCliOptions episode;
 };
@@ -31,6 +32,7 @@ int run(const SuiteOptions& o) {
   run.planner_options = o.episode.planner_settings(&run.settings);
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;
+  run.html_dir = o.html_dir;
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
   if (!o.json_path.empty() && !write_text_file("occtrack bench suite", o.json_path, io::suite_json(result) + "\n"))
@@ -48,6 +50,8 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
   cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary} as JSON");
   cmd->add_option("--svg-dir", o->svg_dir, "Write one figure per episode into this folder");
+  cmd->add_option("--html-dir", o->html_dir,
+                  "Write one animated HTML replay per episode into this folder, and index.html linking them");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 

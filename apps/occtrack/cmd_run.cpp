@@ -1,4 +1,4 @@
-// occtrack run SCENARIO --planner NAME [--svg FILE] [--json FILE]
+// occtrack run SCENARIO --planner NAME [--svg FILE] [--html FILE] [--json FILE]
 //
 // Runs one closed-loop episode with a progress display and prints its metrics.
 #include <cstdio>
@@ -6,6 +6,7 @@
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
+#include "occtrack/io/html_replay.hpp"
 #include "occtrack/io/results.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/io/svg.hpp"
@@ -16,7 +17,7 @@ namespace occtrack::app {
 namespace {
 
 struct RunOptions {
-  std::string scenario_path, svg_path, json_path;
+  std::string scenario_path, svg_path, html_path, json_path;
   EpisodeCliOptions episode;
 };
 
@@ -26,7 +27,8 @@ int run(const RunOptions& o) {
   const core::Scenario scenario = io::read_scenario(o.scenario_path);
   // --latency auto is measured here, once, before the episode (Protocol v2); a bad planner name fails there,
   // before anything is measured, or just below.
-  const sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
+  sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
+  settings.record_cycles = !o.html_path.empty();  // the replay shows every cycle's scan and plans
   auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings(&settings));
   Progress progress(scenario.name + " (" + planner->name() + ")");
   const sim::EpisodeResult result =
@@ -58,6 +60,10 @@ int run(const RunOptions& o) {
     ok = write_text_file(kWho, o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
     if (ok) std::printf("  figure           %s\n", o.svg_path.c_str());
   }
+  if (!o.html_path.empty()) {
+    ok = write_text_file(kWho, o.html_path, io::episode_html(scenario, result.trace, m)) && ok;
+    if (ok) std::printf("  replay           %s\n", o.html_path.c_str());
+  }
   return ok ? kExitOk : kExitInputError;
 }
 
@@ -68,6 +74,8 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("scenario", o->scenario_path, "Scenario file (occtrack.scenario.v1 YAML)")->required();
   add_episode_options(cmd, o->episode);
   cmd->add_option("--svg", o->svg_path, "Write a top-down figure of the episode");
+  cmd->add_option("--html", o->html_path,
+                  "Write an animated replay of the episode: one self-contained HTML page (scan, plans, metrics)");
   cmd->add_option("--json", o->json_path, "Write the episode's metrics as JSON");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }

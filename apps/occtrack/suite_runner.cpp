@@ -7,8 +7,10 @@
 #include <fstream>
 #include <mutex>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
+#include "occtrack/io/html_replay.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/io/svg.hpp"
 #include "occtrack/sim/metrics.hpp"
@@ -23,6 +25,20 @@ fs::path suite_folder(const std::string& suite) {
   if (fs::is_directory(suite)) return suite;
   if (fs::is_directory(fs::path("scenarios") / suite)) return fs::path("scenarios") / suite;
   throw std::runtime_error("suite \"" + suite + "\": no such folder (nor scenarios/" + suite + ")");
+}
+
+// The output folder, made up front so that a bad path fails before any episode runs.
+void make_folder(const char* option, const std::string& folder) {
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error || !fs::is_directory(folder))
+    throw std::runtime_error(std::string(option) + " " + folder + ": cannot create the folder" +
+                             (error ? " (" + error.message() + ")" : ""));
+}
+
+void write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!(out << text)) throw std::runtime_error(path.string() + ": cannot write the file");
 }
 
 }  // namespace
@@ -56,7 +72,11 @@ Suite load_suite(const std::string& suite, int episodes) {
 core::SuiteResult run_suite(const Suite& suite, const SuiteRunOptions& o) {
   const auto& scenarios = suite.scenarios;
   if (!o.svg_dir.empty()) fs::create_directories(o.svg_dir);
+  if (!o.html_dir.empty()) make_folder("--html-dir", o.html_dir);
+  sim::EpisodeSettings settings = o.settings;
+  settings.record_cycles = !o.html_dir.empty();  // the replays show every cycle's scan and plans
   std::vector<core::EpisodeMetrics> metrics(scenarios.size());
+  std::vector<std::string> pages(scenarios.size());  // file names in html_dir
   std::atomic<std::size_t> next{0};
   int done = 0;
   std::mutex print;
@@ -65,11 +85,15 @@ core::SuiteResult run_suite(const Suite& suite, const SuiteRunOptions& o) {
     for (std::size_t i = next++; i < scenarios.size(); i = next++) {
       try {
         auto planner = planners::make_planner(o.planner, o.planner_options);
-        const sim::EpisodeResult r = sim::run_episode(scenarios[i], *planner, o.settings);
+        const sim::EpisodeResult r = sim::run_episode(scenarios[i], *planner, settings);
         metrics[i] = r.metrics;
         if (!o.svg_dir.empty()) {
           std::ofstream svg(fs::path(o.svg_dir) / (scenarios[i].name + "." + planner->name() + ".svg"));
           svg << io::episode_svg(scenarios[i], r.trace, r.metrics);
+        }
+        if (!o.html_dir.empty()) {
+          pages[i] = scenarios[i].name + "." + planner->name() + ".html";
+          write_file(fs::path(o.html_dir) / pages[i], io::episode_html(scenarios[i], r.trace, r.metrics));
         }
         const std::lock_guard<std::mutex> lock(print);
         const auto& m = r.metrics;
@@ -87,7 +111,9 @@ core::SuiteResult run_suite(const Suite& suite, const SuiteRunOptions& o) {
   for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
   if (!failure.empty()) throw std::runtime_error(failure);
-  return sim::summarize_suite(suite.name, o.planner, metrics);
+  core::SuiteResult result = sim::summarize_suite(suite.name, o.planner, metrics);
+  if (!o.html_dir.empty()) write_file(fs::path(o.html_dir) / "index.html", io::suite_html_index(result, pages));
+  return result;
 }
 
 }  // namespace occtrack::app

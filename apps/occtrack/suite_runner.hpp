@@ -38,6 +38,9 @@ struct SuiteRunOptions {
   sim::EpisodeSettings settings;
   int jobs = 1;                             ///< episodes run at the same time
   std::string svg_dir;                      ///< non-empty: one figure per episode into this folder
+  /// non-empty: one HTML replay per episode into this folder, and index.html linking them (the episodes
+  /// then record their planning cycles, sim::EpisodeSettings::record_cycles)
+  std::string html_dir;
   std::string progress_label;               ///< put in front of each episode's progress line
 };
 

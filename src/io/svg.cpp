@@ -12,11 +12,16 @@
 #include <utility>
 #include <vector>
 
+#include "document_util.hpp"
+
 namespace occtrack::io {
 
 namespace {
 
 using core::Vec2;
+using detail::escape_xml;
+using detail::fixed;
+using detail::milliseconds;
 
 // Layout of the document, pixels: the title band, the plot with its label gutters, the legend below.
 constexpr double kHeaderPx = 56;
@@ -110,44 +115,7 @@ double legend_height(std::size_t entries, int width_px) {
 void check(const core::Trace& trace, const SvgOptions& options) {
   std::string error;
   if (!options.validate(&error)) throw std::invalid_argument("episode_svg: options: " + error);
-  const std::size_t n = trace.robot.size();
-  if (trace.time.size() != n || trace.target.size() != n || trace.occluded.size() != n)
-    throw std::invalid_argument("episode_svg: trace lists differ in length: time " + std::to_string(trace.time.size()) +
-                                ", robot " + std::to_string(n) + ", target " + std::to_string(trace.target.size()) +
-                                ", occluded " + std::to_string(trace.occluded.size()));
-}
-
-// ---------------------------------------------------------------------------------------------------------
-// Text.
-
-std::string escape_xml(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-// Fixed notation with `decimals`, or "n/a" for a non-finite value (never "nan" in the document).
-std::string fixed(double value, int decimals) {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
-  return buffer;
-}
-
-// Three significant figures for timings from microseconds to seconds, without exponents.
-std::string milliseconds(double ms) {
-  if (!std::isfinite(ms)) return "n/a";
-  return fixed(ms, std::abs(ms) >= 100 ? 0 : std::abs(ms) >= 10 ? 1 : std::abs(ms) >= 1 ? 2 : 3);
+  detail::check_trace(trace, "episode_svg");
 }
 
 // ---------------------------------------------------------------------------------------------------------

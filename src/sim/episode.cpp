@@ -195,6 +195,12 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
         command = next;
         next_cycle = step + plan_every;
       }
+      if (settings.record_cycles) {  // copies: the snapshot below may take the plan, and `out` is reused
+        const auto first = out.candidates.begin();
+        const auto kept =
+            static_cast<std::ptrdiff_t>(std::min(out.candidates.size(), core::CycleRecord::kMaxCandidates));
+        result.trace.cycles.push_back({t, position, scan, out.plan, {first, first + kept}});
+      }
       if (snapshot_every > 0 && step >= next_snapshot &&
           static_cast<int>(result.trace.snapshots.size()) < settings.snapshots) {
         result.trace.snapshots.push_back({t, position, target, std::move(out.plan), std::move(out.candidates)});

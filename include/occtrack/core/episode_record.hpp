@@ -3,9 +3,11 @@
 // by io/results and io/svg.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
+#include "occtrack/core/scan.hpp"
 #include "occtrack/core/scenario.hpp"
 #include "occtrack/core/timing.hpp"
 
@@ -65,12 +67,26 @@ struct Snapshot {
   std::vector<std::vector<Vec2>> candidates;
 };
 
+/// One planning cycle as the planner saw and answered it, for replays (sim::EpisodeSettings::record_cycles).
+struct CycleRecord {
+  /// Candidates kept per cycle: the planner's first ones (ProjCem returns 24). Ten show the spread of the
+  /// samples and keep a 150 s episode's HTML replay under ~10 MB (io/html_replay.hpp).
+  static constexpr std::size_t kMaxCandidates = 10;
+
+  double time = 0;
+  Vec2 robot = Vec2::Zero();
+  Scan scan;  ///< as the planner received it (world frame, from `robot`)
+  std::vector<Vec2> plan;
+  std::vector<std::vector<Vec2>> candidates;  ///< at most kMaxCandidates
+};
+
 /// What happened, for figures: every trace_stride-th physics step.
 struct Trace {
   std::vector<double> time;
   std::vector<Vec2> robot, target;
   std::vector<char> occluded;  ///< the line of sight was blocked at that instant
   std::vector<Snapshot> snapshots;
+  std::vector<CycleRecord> cycles;  ///< every planning cycle; empty unless record_cycles was set
 };
 
 }  // namespace occtrack::core

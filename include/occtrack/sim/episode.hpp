@@ -50,6 +50,9 @@ struct EpisodeSettings {
   core::TrackingBand band;        ///< for the in-band share
   int snapshots = 6;              ///< plans (with candidates) kept for figures, evenly over the episode
   int trace_stride = 5;           ///< keep every n-th physics step in the trace (figures, JSON)
+  /// Keep every planning cycle's scan, plan and candidates in Trace::cycles (HTML replays). Off by default:
+  /// nothing is copied and the results are the same either way.
+  bool record_cycles = false;
 
   bool validate(std::string* error = nullptr) const;
 };
