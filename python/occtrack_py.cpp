@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -19,6 +20,7 @@
 
 #include "../apps/occtrack/episode_common.hpp"
 #include "occtrack/io/dataset_file.hpp"
+#include "occtrack/io/html_replay.hpp"
 #include "occtrack/io/model_file.hpp"
 #include "occtrack/io/results.hpp"
 #include "occtrack/io/safetensors.hpp"
@@ -261,15 +263,23 @@ py::dict trace_dict(const core::Trace& trace) {
   return d;
 }
 
-py::dict run_episode(const py::object& scenario_or_path, const std::string& planner, const py::kwargs& settings) {
+py::dict run_episode(const py::object& scenario_or_path, const std::string& planner, const py::object& html,
+                     const py::kwargs& settings) {
   const core::Scenario scenario = scenario_of(scenario_or_path);
   const app::EpisodeCliOptions options = episode_options(planner, settings);
   sim::EpisodeResult result;
   {
     py::gil_scoped_release release;
-    const sim::EpisodeSettings episode = app::resolve_episode_settings(options, {scenario});
+    sim::EpisodeSettings episode = app::resolve_episode_settings(options, {scenario});
+    episode.record_cycles = !html.is_none();  // as `occtrack run --html`
     auto p = planners::make_planner(options.planner, options.planner_settings(&episode));
     result = sim::run_episode(scenario, *p, episode);
+  }
+  if (!html.is_none()) {
+    const std::string path = py::str(py::module_::import("os").attr("fspath")(html));
+    std::ofstream out(path, std::ios::binary);
+    out << io::episode_html(scenario, result.trace, result.metrics);
+    if (!out) throw io::InputError(path + ": cannot write the file");
   }
   // The metrics under the spec's keys: the JSON `occtrack run --json` writes, read back.
   py::dict metrics = py::module_::import("json").attr("loads")(io::episode_json(result.metrics));
@@ -375,7 +385,9 @@ PYBIND11_MODULE(_occtrack, m) {
         "A benchmark suite's scenarios, as `occtrack scenario generate --suite` writes them");
 
   m.def("run_episode", &run_episode, py::arg("scenario"), py::kw_only(), py::arg("planner") = "cvae",
-        "One closed-loop episode: the metrics under the spec's keys, and the trace under 'trace'");
+        py::arg("html") = py::none(),
+        "One closed-loop episode: the metrics under the spec's keys, and the trace under 'trace'; html=PATH "
+        "also writes the replay page, as `occtrack run --html`");
 
   m.def("load_tensors", [](const std::string& path) { return tensors_and_metadata(io::read_safetensors(path)); },
         py::arg("path"), "Any safetensors file: ({name: array}, {key: value})");

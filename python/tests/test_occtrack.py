@@ -153,3 +153,12 @@ def test_the_readme_shows_the_example_as_it_is():
     example = (SOURCE / "python" / "examples" / "track.py").read_text()
     readme = (SOURCE / "README.md").read_text()
     assert "```python\n" + example + "```" in readme
+
+
+def test_run_episode_writes_the_replay_page(tmp_path):
+    page = tmp_path / "forest.html"
+    occtrack.run_episode(FOREST, planner="follower", html=page)
+    text = page.read_text()
+    assert 'id="replay-data"' in text and "https://" not in text
+    with pytest.raises(ValueError, match="cannot write"):
+        occtrack.run_episode(FOREST, planner="follower", html=tmp_path / "no-such-folder" / "x.html")
