@@ -171,8 +171,9 @@ class PyPlanner {
   void reset() { planner_->reset(); }
 
   py::dict plan(const py::object& robot_position, const py::object& robot_velocity, const py::object& target_position,
-                const py::object& target_velocity, const py::object& ranges, double angle_min,
-                std::optional<double> angle_increment, double range_max, double time, double target_age) {
+                const py::object& target_velocity, const py::object& ranges, const py::object& angles,
+                double angle_min, std::optional<double> angle_increment, double range_max, double time,
+                double target_age) {
     planners::PlannerInput input;
     input.robot_position = vec2(robot_position, "robot_position");
     input.robot_velocity = vec2(robot_velocity, "robot_velocity");
@@ -196,7 +197,24 @@ class PyPlanner {
       if (std::isnan(scan_.ranges[i]) || scan_.ranges[i] < 0.0)
         throw py::value_error("ranges: beam " + std::to_string(i) +
                               " is NaN or negative (a beam with no return is inf)");
-    const double increment = angle_increment.value_or(2.0 * std::numbers::pi / static_cast<double>(r.shape(0)));
+    double increment = angle_increment.value_or(2.0 * std::numbers::pi / static_cast<double>(r.shape(0)));
+    if (!angles.is_none()) {
+      // One angle per beam, evenly spaced (a core::Scan is); they replace angle_min and angle_increment.
+      Array a;
+      try {
+        a = Array::ensure(angles);
+      } catch (const py::error_already_set&) {
+      }
+      if (!a || a.ndim() != 1 || a.shape(0) != r.shape(0))
+        throw py::value_error("angles: must be a 1-D array with one angle per range (" +
+                              std::to_string(r.shape(0)) + ")");
+      const py::ssize_t n = a.shape(0);
+      angle_min = a.at(0);
+      increment = n > 1 ? (a.at(n - 1) - a.at(0)) / static_cast<double>(n - 1) : increment;
+      for (py::ssize_t i = 0; i < n; ++i)
+        if (!(std::abs(a.at(i) - (angle_min + static_cast<double>(i) * increment)) <= 1e-6))
+          throw py::value_error("angles: must be finite and evenly spaced (beam " + std::to_string(i) + ")");
+    }
     if (!std::isfinite(angle_min)) throw py::value_error("angle_min: must be finite");
     if (!(std::isfinite(increment) && increment > 0.0)) throw py::value_error("angle_increment: must be > 0");
     if (!(std::isfinite(range_max) && range_max > 0.0)) throw py::value_error("range_max: must be > 0");
@@ -323,11 +341,12 @@ PYBIND11_MODULE(_occtrack, m) {
       .def_property_readonly("name", &PyPlanner::name)
       .def("reset", &PyPlanner::reset, "Forget warm starts and estimates (a new episode)")
       .def("plan", &PyPlanner::plan, py::kw_only(), py::arg("robot_position"), py::arg("robot_velocity"),
-           py::arg("target_position"), py::arg("target_velocity"), py::arg("ranges"), py::arg("angle_min") = 0.0,
+           py::arg("target_position"), py::arg("target_velocity"), py::arg("ranges"), py::arg("angles") = py::none(), py::arg("angle_min") = 0.0,
            py::arg("angle_increment") = py::none(), py::arg("range_max") = 10.0, py::arg("time") = 0.0,
            py::arg("target_age") = 0.0,
            "One planning cycle. Positions and velocities in the world frame; the scan's angles in the world "
-           "frame's orientation (angle_increment defaults to 360 degrees over the beams; inf: no return). "
+           "frame's orientation: `angles` (one per beam, evenly spaced), or angle_min and angle_increment (which "
+           "defaults to 360 degrees over the beams); inf: no return. "
            "Returns {command, plan (N, 2), candidates (M, N, 2), ok, message, safety, compute_ms}.");
 
   py::class_<core::Scenario>(m, "Scenario", "A scenario (occtrack.scenario.v1)")

@@ -162,3 +162,18 @@ def test_run_episode_writes_the_replay_page(tmp_path):
     assert 'id="replay-data"' in text and "https://" not in text
     with pytest.raises(ValueError, match="cannot write"):
         occtrack.run_episode(FOREST, planner="follower", html=tmp_path / "no-such-folder" / "x.html")
+
+
+def test_scan_angles_as_an_array():
+    planner = occtrack.Planner("follower")
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    a = plan_once(planner, angles=angles)
+    planner.reset()
+    b = plan_once(planner, angle_min=-math.pi, angle_increment=2 * math.pi / 360)
+    np.testing.assert_array_equal(a["command"], b["command"])
+    with pytest.raises(ValueError, match="angles"):
+        plan_once(planner, angles=angles[:10])
+    uneven = angles.copy()
+    uneven[5] += 0.01
+    with pytest.raises(ValueError, match="evenly spaced"):
+        plan_once(planner, angles=uneven)
