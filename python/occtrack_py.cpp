@@ -412,14 +412,16 @@ PYBIND11_MODULE(_occtrack, m) {
         py::arg("path"), "Any safetensors file: ({name: array}, {key: value})");
   m.def("load_dataset",
         [](const std::string& path) {
-          io::read_dataset_file(path);  // validates: the same errors as `occtrack train`
-          return tensors_and_metadata(io::read_safetensors(path));
+          const io::TensorFile file = io::read_safetensors(path);  // read once, then
+          io::validate_dataset_file(file);  // validated: the same errors as `occtrack train`
+          return tensors_and_metadata(file);
         },
         py::arg("path"), "A dataset (occtrack.dataset.v1), validated: ({column: array}, metadata)");
   m.def("load_model",
         [](const std::string& path) {
-          io::read_model_file(path);
-          return tensors_and_metadata(io::read_safetensors(path));
+          const io::TensorFile file = io::read_safetensors(path);
+          io::validate_model_file(file);
+          return tensors_and_metadata(file);
         },
         py::arg("path"), "A model file, validated: ({tensor: array}, metadata)");
 }
