@@ -13,11 +13,11 @@ esac
 common=(-G Ninja -DCMAKE_BUILD_TYPE=Release -DOCCTRACK_NATIVE=ON)
 if [ "$mode" = run ]; then
   cmake -S . -B build "${common[@]}" -DOCCTRACK_LEARNING=OFF -DOCCTRACK_BUILD_TESTS=OFF \
-    -DOCCTRACK_BUILD_BENCHMARKS=OFF -DOCCTRACK_PYTHON=OFF -DOCCTRACK_ROS=OFF "$@"
+    -DOCCTRACK_BUILD_BENCHMARKS=OFF -DOCCTRACK_PYTHON=OFF -DOCCTRACK_ROS=OFF -DOCCTRACK_MPI=OFF "$@"
   cmake --build build --parallel "$(nproc)" --target occtrack_cli
 else
   # Every option named, so that a build folder first made by `build.sh run` gets the rest too.
   cmake -S . -B build "${common[@]}" -DOCCTRACK_LEARNING=AUTO -DOCCTRACK_BUILD_TESTS=ON \
-    -DOCCTRACK_BUILD_BENCHMARKS=ON -DOCCTRACK_PYTHON=AUTO -DOCCTRACK_ROS=AUTO "$@"
+    -DOCCTRACK_BUILD_BENCHMARKS=ON -DOCCTRACK_PYTHON=AUTO -DOCCTRACK_ROS=AUTO -DOCCTRACK_MPI=AUTO "$@"
   cmake --build build --parallel "$(nproc)"
 fi

@@ -18,6 +18,8 @@ test_packages=(
   clang-14 libclang-rt-14-dev                    # the fuzz targets (fuzz/, libFuzzer); CI runs them
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python (python/), tests, plot
   chromium                                       # the HTML replay's browser test (headless)
+  libopenmpi-dev openmpi-bin                     # `mpirun occtrack dataset generate` (docs/scaling.md)
+  libgloo-dev                                    # data-parallel `occtrack train` (c10d Gloo's headers)
 )
 ros_packages=(  # the ROS 1 node (ros/) and its closed-loop test against a real roscore
   libroscpp-dev libstd-msgs-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libvisualization-msgs-dev
