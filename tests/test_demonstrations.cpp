@@ -250,6 +250,97 @@ TEST(Demonstrations, SameSeedGivesIdenticalBytesWhateverTheJobs) {
   EXPECT_FALSE(one == other) << "another seed should make other worlds";
 }
 
+/// Shard k of `shards` of the run `s` (what rank k computes under MPI).
+sim::Demonstrations shard_of(sim::DemonstrationSettings s, int k, int shards, sim::DemonstrationReport* report) {
+  s.shard = k;
+  s.shards = shards;
+  return sim::generate_demonstrations(s, report);
+}
+
+TEST(Demonstrations, ShardsInterleavedAreTheOneProcessRunToTheByte) {
+  sim::DemonstrationSettings settings = tiny();
+  settings.episodes = 4;
+  settings.duration = 1.5;
+  settings.label_every = 2;
+  settings.worlds = {sim::DemonstrationWorld::forest, sim::DemonstrationWorld::boxes};
+  sim::DemonstrationReport whole_report;
+  const sim::Demonstrations whole = sim::generate_demonstrations(settings, &whole_report);
+  const auto whole_bytes = io::serialize_safetensors(io::to_tensor_file(whole));
+  ASSERT_EQ(whole_report.episodes, 4);
+  ASSERT_GT(whole.rows, 0);
+  // 2 shards; 3 (4 episodes do not divide); 5 (the last shard has no episode).
+  for (const int shards : {2, 3, 5}) {
+    SCOPED_TRACE(std::to_string(shards) + " shards");
+    std::vector<sim::Demonstrations> parts;
+    sim::DemonstrationReport report;
+    for (int k = 0; k < shards; ++k) {
+      sim::DemonstrationReport part_report;
+      parts.push_back(shard_of(settings, k, shards, &part_report));
+      const sim::Demonstrations& part = parts.back();
+      // Its own episodes, by their index in the whole run, and its own row count.
+      EXPECT_EQ(part_report.episodes, k < 4 ? 1 + (3 - k) / shards : 0) << "shard " << k;
+      for (const std::int32_t e : part.episode) EXPECT_EQ(e % shards, k) << "shard " << k;
+      EXPECT_EQ(part.metadata.at("rows"), std::to_string(part.rows));
+      report.add(part_report);
+    }
+    const sim::Demonstrations merged = sim::interleave_demonstration_shards(parts);
+    EXPECT_EQ(merged.rows, whole.rows);
+    EXPECT_EQ(merged.cloud_points, whole.cloud_points);
+    EXPECT_EQ(merged.nearest_points, whole.nearest_points);
+    EXPECT_EQ(merged.coefficients, whole.coefficients);
+    EXPECT_TRUE(merged.observation == whole.observation);
+    EXPECT_TRUE(merged.cloud == whole.cloud);
+    EXPECT_TRUE(merged.obstacles == whole.obstacles);
+    EXPECT_TRUE(merged.expert_xi == whole.expert_xi);
+    EXPECT_TRUE(merged.expert_cost == whole.expert_cost);
+    EXPECT_EQ(merged.episode, whole.episode);
+    EXPECT_TRUE(merged.time == whole.time);
+    EXPECT_EQ(merged.metadata, whole.metadata);
+    EXPECT_TRUE(io::serialize_safetensors(io::to_tensor_file(merged)) == whole_bytes);
+    // The shards' reports add up to the run's.
+    EXPECT_EQ(report.episodes, whole_report.episodes);
+    EXPECT_EQ(report.episodes_failed, whole_report.episodes_failed);
+    EXPECT_EQ(report.failures, whole_report.failures);
+    EXPECT_EQ(report.cycles, whole_report.cycles);
+    EXPECT_EQ(report.labelled, whole_report.labelled);
+    EXPECT_EQ(report.rows, whole_report.rows);
+    EXPECT_EQ(report.skipped(), whole_report.skipped());
+  }
+}
+
+TEST(Demonstrations, InterleavingRefusesPartsOfDifferentRunsNamingThePart) {
+  sim::DemonstrationSettings settings = tiny();
+  settings.episodes = 2;
+  settings.duration = 0.5;
+  const sim::Demonstrations first = shard_of(settings, 0, 2, nullptr);
+  const sim::Demonstrations second = shard_of(settings, 1, 2, nullptr);
+  ASSERT_GT(first.rows, 0);
+  ASSERT_GT(second.rows, 0);
+  const auto expect_refused = [](std::vector<sim::Demonstrations> parts, const std::string& says) {
+    try {
+      sim::interleave_demonstration_shards(std::move(parts));
+      ADD_FAILURE() << "accepted; expected: " << says;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+    }
+  };
+  expect_refused({}, "no part");
+  expect_refused({first, first}, "episode 0 is in parts 0 and 1");
+  sim::Demonstrations other = second;
+  other.metadata["generator"] = "{}";
+  expect_refused({first, other}, "part 1: metadata 'generator' differs");
+  other = second;
+  other.nearest_points = 30;
+  expect_refused({first, other}, "part 1: sizes");
+  other = second;
+  other.time.pop_back();
+  expect_refused({first, other}, "part 1: a column");
+  // A part out of episode order: the second shard's rows, then the first's.
+  other = second;
+  io::append_rows(other, first, 0);
+  expect_refused({other}, "part 0 is not ordered by episode");
+}
+
 TEST(Demonstrations, V2EpisodesInThePaperWorldsWithTeleopTargetsLatencyAndAShieldedDriver) {
   sim::DemonstrationSettings s = tiny();
   s.episodes = 4;
@@ -365,6 +456,13 @@ TEST(Demonstrations, BadSettingsAreNamed) {
   s = tiny();
   s.jobs = 0;
   expect_refused(s, "jobs");
+  s = tiny();
+  s.shards = 2;
+  s.shard = 2;
+  expect_refused(s, "shard");
+  s.shard = 0;
+  s.shards = 0;
+  expect_refused(s, "shard");
   s = tiny();
   s.expert.samples = 2;
   expect_refused(s, "expert.samples");

@@ -158,6 +158,8 @@ bool DemonstrationSettings::validate(std::string* error) const {
     why << "driver must be \"expert\" or a planner name";
   } else if (jobs < 1 || jobs > 4096) {
     why << "jobs (" << jobs << ") must be between 1 and 4096";
+  } else if (shards < 1 || shard < 0 || shard >= shards) {
+    why << "shard (" << shard << ") must be between 0 and shards - 1 (shards: " << shards << ", at least 1)";
   } else if (!expert.validate(&inner)) {
     why << "expert." << inner;
   } else if (!episode.validate(&inner)) {
@@ -249,7 +251,6 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
 
 namespace {
 
-
 void append_rows(Demonstrations& d, const std::vector<DemonstrationRow>& rows, std::int32_t episode) {
   for (const DemonstrationRow& r : rows) {
     for (int j = 0; j < kObservationSize; ++j) d.observation.push_back(static_cast<float>(r.observation(j)));
@@ -264,16 +265,96 @@ void append_rows(Demonstrations& d, const std::vector<DemonstrationRow>& rows, s
   }
 }
 
-void add_counts(DemonstrationReport& total, const DemonstrationReport& part) {
-  total.cycles += part.cycles;
-  total.labelled += part.labelled;
-  total.rows += part.rows;
-  total.skipped_failed += part.skipped_failed;
-  total.skipped_nonfinite += part.skipped_nonfinite;
-  total.expert_ms += part.expert_ms;
+/// Appends rows [begin, end) of `from` to `into`.
+void append_row_range(Demonstrations& into, const Demonstrations& from, std::int64_t begin, std::int64_t end) {
+  auto copy = [&](auto& to, const auto& column, std::int64_t width) {
+    to.insert(to.end(), column.begin() + begin * width, column.begin() + end * width);
+  };
+  copy(into.observation, from.observation, kObservationSize);
+  copy(into.cloud, from.cloud, std::int64_t{2} * from.cloud_points);
+  copy(into.obstacles, from.obstacles, std::int64_t{4} * from.nearest_points);
+  copy(into.expert_xi, from.expert_xi, std::int64_t{2} * from.coefficients);
+  copy(into.expert_cost, from.expert_cost, 1);
+  copy(into.episode, from.episode, 1);
+  copy(into.time, from.time, 1);
+  into.rows += end - begin;
+}
+
+/// The one home of the file's row order: appends every row of `parts` to `into` ordered by episode, the rows
+/// of an episode together and in their order. Each part must be ordered by episode, and no two parts may hold
+/// the same episode (std::invalid_argument otherwise). Used with a part per episode (one process) and with a
+/// part per shard; each part is freed as soon as its last row is copied.
+void append_ordered_by_episode(Demonstrations& into, std::vector<Demonstrations>& parts) {
+  struct Run {  // consecutive rows of one episode in one part
+    std::int32_t episode;
+    std::size_t part;
+    std::int64_t begin, end;
+  };
+  std::vector<Run> runs;
+  std::int64_t rows = 0;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const Demonstrations& p = parts[k];
+    for (std::int64_t r = 0; r < p.rows;) {
+      const auto at = [&](std::int64_t row) { return p.episode[static_cast<std::size_t>(row)]; };
+      std::int64_t end = r + 1;
+      while (end < p.rows && at(end) == at(r)) ++end;
+      if (end < p.rows && at(end) < at(r))
+        throw std::invalid_argument("demonstrations: part " + std::to_string(k) + " is not ordered by episode (row " +
+                                    std::to_string(end) + ")");
+      runs.push_back({at(r), k, r, end});
+      r = end;
+    }
+    rows += p.rows;
+  }
+  std::stable_sort(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.episode < b.episode; });
+  for (std::size_t j = 1; j < runs.size(); ++j)
+    if (runs[j].episode == runs[j - 1].episode)
+      throw std::invalid_argument("demonstrations: episode " + std::to_string(runs[j].episode) + " is in parts " +
+                                  std::to_string(runs[j - 1].part) + " and " + std::to_string(runs[j].part));
+  const auto reserve = [&](auto& column, std::int64_t width) {
+    column.reserve(column.size() + static_cast<std::size_t>(rows * width));
+  };
+  reserve(into.observation, kObservationSize);
+  reserve(into.cloud, std::int64_t{2} * into.cloud_points);
+  reserve(into.obstacles, std::int64_t{4} * into.nearest_points);
+  reserve(into.expert_xi, std::int64_t{2} * into.coefficients);
+  reserve(into.expert_cost, 1);
+  reserve(into.episode, 1);
+  reserve(into.time, 1);
+  for (const Run& run : runs) {
+    append_row_range(into, parts[run.part], run.begin, run.end);
+    if (run.end == parts[run.part].rows) parts[run.part] = Demonstrations{};
+  }
+}
+
+/// True when every column of `d` holds `rows` rows of its sizes.
+bool columns_agree(const Demonstrations& d) {
+  const auto holds = [&](const auto& column, std::int64_t width) {
+    return static_cast<std::int64_t>(column.size()) == d.rows * width;
+  };
+  return d.rows >= 0 && holds(d.observation, kObservationSize) && holds(d.cloud, std::int64_t{2} * d.cloud_points) &&
+         holds(d.obstacles, std::int64_t{4} * d.nearest_points) &&
+         holds(d.expert_xi, std::int64_t{2} * d.coefficients) && holds(d.expert_cost, 1) && holds(d.episode, 1) &&
+         holds(d.time, 1);
 }
 
 }  // namespace
+
+void DemonstrationReport::add(const DemonstrationReport& other) {
+  episodes += other.episodes;
+  episodes_failed += other.episodes_failed;
+  if (!other.failures.empty()) {
+    failures.insert(failures.end(), other.failures.begin(), other.failures.end());
+    std::sort(failures.begin(), failures.end());
+  }
+  cycles += other.cycles;
+  labelled += other.labelled;
+  rows += other.rows;
+  skipped_failed += other.skipped_failed;
+  skipped_nonfinite += other.skipped_nonfinite;
+  expert_ms += other.expert_ms;
+  seconds = std::max(seconds, other.seconds);
+}
 
 Demonstrations generate_demonstrations(const DemonstrationSettings& settings, DemonstrationReport* report_out,
                                        const std::function<void(const DemonstrationProgress&)>& progress) {
@@ -291,7 +372,11 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   };
   make_driver(settings.first_seed);  // refuse an unknown driver (or a bad model) before any episode runs
 
-  const int total = settings.episodes;
+  // This shard's episodes: shard, shard + shards, ... (every episode in one process). `k` counts them; `i`,
+  // an episode's index in the whole run, seeds it and labels its rows.
+  const int total =
+      settings.shard < settings.episodes ? 1 + (settings.episodes - 1 - settings.shard) / settings.shards : 0;
+  const auto episode_index = [&](int k) { return settings.shard + k * settings.shards; };
   const int W = static_cast<int>(settings.worlds.size());
   const int S = static_cast<int>(settings.target_speeds.size());
   // Each finished episode's rows, already in float32 (half the memory of DemonstrationRow).
@@ -320,7 +405,8 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   };
 
   auto worker = [&]() {
-    for (int i = next++; i < total && !stop; i = next++) {
+    for (int k = next++; k < total && !stop; k = next++) {
+      const int i = episode_index(k);
       const std::uint64_t seed = demonstration_seed(settings, i);
       const DemonstrationWorld kind = settings.worlds[static_cast<std::size_t>(i % W)];
       const double speed = settings.target_speeds[static_cast<std::size_t>((i / W) % S)];
@@ -333,7 +419,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
           const std::lock_guard<std::mutex> guard(lock);
           ++report.episodes_failed;
           report.failures.push_back(name + " (seed " + std::to_string(seed) + "): " + e.what());
-          fraction[static_cast<std::size_t>(i)] = 1.0;
+          fraction[static_cast<std::size_t>(k)] = 1.0;
           ++done;
           notify();
           continue;
@@ -349,18 +435,18 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
         episode.trace_stride = std::numeric_limits<int>::max();
         run_episode(scenario, recorder, episode, [&](double f) {
           const std::lock_guard<std::mutex> guard(lock);
-          fraction[static_cast<std::size_t>(i)] = std::min(1.0, f);
-          live_rows[static_cast<std::size_t>(i)] = static_cast<std::int64_t>(recorder.rows().size());
+          fraction[static_cast<std::size_t>(k)] = std::min(1.0, f);
+          live_rows[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(recorder.rows().size());
           notify();
         });
         Demonstrations block;
         append_rows(block, recorder.take_rows(), i);
         const std::lock_guard<std::mutex> guard(lock);
-        live_rows[static_cast<std::size_t>(i)] = block.rows;
-        episodes[static_cast<std::size_t>(i)] = std::move(block);
-        add_counts(report, recorder.report());
+        live_rows[static_cast<std::size_t>(k)] = block.rows;
+        episodes[static_cast<std::size_t>(k)] = std::move(block);
+        report.add(recorder.report());
         ++report.episodes;
-        fraction[static_cast<std::size_t>(i)] = 1.0;
+        fraction[static_cast<std::size_t>(k)] = 1.0;
         ++done;
         notify();
       } catch (const std::exception& e) {
@@ -385,19 +471,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   data.nearest_points = settings.expert.perception.nearest_count;
   data.coefficients = settings.expert.projection.coefficients();
   data.metadata = demonstration_metadata(settings);
-  std::int64_t rows = 0;
-  for (const Demonstrations& e : episodes) rows += e.rows;
-  data.observation.reserve(static_cast<std::size_t>(rows * kObservationSize));
-  data.cloud.reserve(static_cast<std::size_t>(rows * data.cloud_points * 2));
-  data.obstacles.reserve(static_cast<std::size_t>(rows * data.nearest_points * 4));
-  data.expert_xi.reserve(static_cast<std::size_t>(rows * data.coefficients * 2));
-  data.expert_cost.reserve(static_cast<std::size_t>(rows));
-  data.episode.reserve(static_cast<std::size_t>(rows));
-  data.time.reserve(static_cast<std::size_t>(rows));
-  for (Demonstrations& e : episodes) {  // ordered by episode, whatever order the threads finished in
-    append_rows(data, e, 0);
-    e = Demonstrations{};  // free each episode's buffers as soon as they are copied
-  }
+  append_ordered_by_episode(data, episodes);  // whatever order the threads finished in
   data.metadata["rows"] = std::to_string(data.rows);
   std::sort(report.failures.begin(), report.failures.end());
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -405,7 +479,41 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
   return data;
 }
 
-// ---------------------------------------------------------------------------------------------------------
-// Files.
+Demonstrations interleave_demonstration_shards(std::vector<Demonstrations> parts) {
+  const char* const who = "interleave_demonstration_shards: ";
+  if (parts.empty()) throw std::invalid_argument(std::string(who) + "no part");
+  const Demonstrations& first = parts.front();
+  Demonstrations data;
+  data.cloud_points = first.cloud_points;
+  data.nearest_points = first.nearest_points;
+  data.coefficients = first.coefficients;
+  data.metadata = first.metadata;
+  data.metadata.erase("rows");
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const Demonstrations& p = parts[k];
+    const std::string part = "part " + std::to_string(k);
+    if (p.cloud_points != data.cloud_points || p.nearest_points != data.nearest_points ||
+        p.coefficients != data.coefficients)
+      throw std::invalid_argument(who + part +
+                                  ": sizes (cloud points, nearest points, coefficients) differ from part 0's");
+    if (!columns_agree(p)) throw std::invalid_argument(who + part + ": a column does not hold `rows` rows");
+    std::map<std::string, std::string> metadata = p.metadata;
+    metadata.erase("rows");
+    if (metadata != data.metadata) {
+      std::string key;  // the first that differs
+      for (const auto& [name, value] : metadata)
+        if (auto it = data.metadata.find(name); it == data.metadata.end() || it->second != value) {
+          key = name;
+          break;
+        }
+      for (const auto& [name, value] : data.metadata)
+        if (key.empty() && metadata.count(name) == 0) key = name;
+      throw std::invalid_argument(who + part + ": metadata '" + key + "' differs from part 0's");
+    }
+  }
+  append_ordered_by_episode(data, parts);
+  data.metadata["rows"] = std::to_string(data.rows);
+  return data;
+}
 
 }  // namespace occtrack::sim

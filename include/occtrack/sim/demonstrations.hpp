@@ -26,7 +26,8 @@
 //
 // Determinism: every episode is a pure function of the settings and its index (world, target path, sensor
 // noise and both planners are seeded from first_seed + index), and rows are ordered by episode, so the same
-// settings give the same bytes whatever `jobs` is.
+// settings give the same bytes whatever `jobs` is, and whatever the number of processes that share the run
+// (`shard` of `shards`, then interleave_demonstration_shards).
 #pragma once
 
 #include <cstdint>
@@ -103,6 +104,12 @@ struct DemonstrationSettings {
   EpisodeSettings episode;
   /// Episodes run at the same time, each on its own thread with its own planners. Does not change the result.
   int jobs = 1;
+  /// This process's share of the run (several processes, e.g. MPI ranks): only the episodes i with
+  /// i % shards == shard. The result holds those episodes' rows, each with its index in the whole run;
+  /// interleave_demonstration_shards() makes the whole run's rows from every shard's. Like `jobs`, not written
+  /// to the metadata: the shards of a run and the run in one process share their metadata but `rows`.
+  int shard = 0;
+  int shards = 1;
   /// Provenance written to the `created_by` metadata (occtrack version and command line).
   std::string created_by = "occtrack";
 
@@ -131,10 +138,13 @@ struct DemonstrationReport {
   double expert_ms = 0.0;      ///< summed wall time of the expert's plan() calls
   double seconds = 0.0;        ///< wall time of generate_demonstrations
   std::int64_t skipped() const { return skipped_failed + skipped_nonfinite; }
+  /// Adds the counts of `other` (a part of the same run: an episode, a shard); failures stay sorted, and
+  /// `seconds` becomes the longer of the two, as the parts ran side by side.
+  void add(const DemonstrationReport& other);
 };
 
 /// Progress, reported after each simulated second of any episode and after each episode (from the worker
-/// threads, one call at a time).
+/// threads, one call at a time). A shard counts only its own episodes.
 struct DemonstrationProgress {
   int episodes_done = 0;
   int episodes_total = 0;
@@ -148,6 +158,12 @@ struct DemonstrationProgress {
 /// fails for another reason than the scenario generator (the message names its seed).
 Demonstrations generate_demonstrations(const DemonstrationSettings& settings, DemonstrationReport* report = nullptr,
                                        const std::function<void(const DemonstrationProgress&)>& progress = {});
+
+/// The whole run from its shards' results (parts[k]: generate_demonstrations with shard k of parts.size()):
+/// exactly what one process returns for the same settings, rows ordered by episode, the sizes and metadata of
+/// the parts with `rows` rewritten. Throws std::invalid_argument when there is no part, when the parts' sizes
+/// or metadata (`rows` aside) differ, or when a part is not ordered by episode or holds an episode of another.
+Demonstrations interleave_demonstration_shards(std::vector<Demonstrations> parts);
 
 /// One row as the recorder sees it (double precision, before it is stored as float32).
 struct DemonstrationRow {
