@@ -65,15 +65,63 @@ nn::BatchNorm1d batch_norm(int features, const NetworkConfig& c) {
   return nn::BatchNorm1d(nn::BatchNorm1dOptions(features).eps(c.batch_norm_eps));
 }
 
+}  // namespace
+
+torch::Tensor normalize_batch(nn::BatchNorm1d& bn, const torch::Tensor& x, const BatchSum* sum) {
+  if (sum == nullptr || !*sum || !bn->is_training()) return bn->forward(x);
+  // Training batch norm over the global batch: the same formulas as torch's (biased variance to normalise,
+  // unbiased in the running estimate), with the sums taken over every process. The sums are differentiable
+  // (their backward sums the gradients over the processes), so the gradient is the one-process gradient.
+  const int64_t channels = x.size(1);
+  const torch::Tensor local = torch::cat({x.sum(0), torch::full({1}, static_cast<double>(x.size(0)), x.options())});
+  const torch::Tensor total = (*sum)(local);
+  const torch::Tensor count = total.index({Slice(channels, channels + 1)}).detach();
+  const torch::Tensor mean = total.index({Slice(0, channels)}) / count;
+  const torch::Tensor centered = x - mean;
+  const torch::Tensor variance = (*sum)(centered.pow(2).sum(0)) / count;
+  const auto& o = bn->options;
+  const torch::Tensor y = centered * torch::rsqrt(variance + o.eps()) * bn->weight + bn->bias;
+  {
+    torch::NoGradGuard no_grad;
+    const double n = count.item<double>();
+    const double momentum = o.momentum().value_or(0.1);
+    bn->running_mean.mul_(1 - momentum).add_(mean.detach(), momentum);
+    bn->running_var.mul_(1 - momentum).add_(variance.detach() * (n / std::max(1.0, n - 1)), momentum);
+    bn->num_batches_tracked.add_(1);
+  }
+  return y;
+}
+
+namespace {
+
 // Batch norm over every leading dimension (batch and points): statistics per channel, the last dimension.
-torch::Tensor per_point(nn::BatchNorm1d& bn, const torch::Tensor& x) {
+torch::Tensor per_point(nn::BatchNorm1d& bn, const torch::Tensor& x, const BatchSum* sum) {
   const auto sizes = x.sizes().vec();
-  return bn->forward(x.reshape({-1, sizes.back()})).reshape(sizes);
+  return normalize_batch(bn, x.reshape({-1, sizes.back()}), sum).reshape(sizes);
 }
 
 }  // namespace
 
-PointNetImpl::PointNetImpl(const NetworkConfig& c, double dropout) {
+PassNoise PassNoise::draw(int64_t rows, const NetworkConfig& config, double dropout, torch::Device device) {
+  PassNoise noise;
+  noise.eps = torch::randn({rows, config.latent}, torch::kFloat32);
+  if (dropout > 0)
+    noise.dropout_scale =
+        torch::bernoulli(torch::full({rows, config.pointnet_hidden}, 1.0 - dropout, torch::kFloat32)) / (1.0 - dropout);
+  noise.eps = noise.eps.to(device);
+  if (noise.dropout_scale.defined()) noise.dropout_scale = noise.dropout_scale.to(device);
+  return noise;
+}
+
+PassNoise PassNoise::rows(int64_t begin, int64_t end) const {
+  PassNoise part;
+  part.eps = eps.index({Slice(begin, end)});
+  if (dropout_scale.defined()) part.dropout_scale = dropout_scale.index({Slice(begin, end)});
+  return part;
+}
+
+PointNetImpl::PointNetImpl(const NetworkConfig& c, double dropout, std::shared_ptr<BatchSum> sum)
+    : sum_(std::move(sum)) {
   int input = 2;
   for (std::size_t i = 0; i < c.pointnet_widths.size(); ++i) {
     const int width = c.pointnet_widths[i];
@@ -89,16 +137,17 @@ PointNetImpl::PointNetImpl(const NetworkConfig& c, double dropout) {
 
 torch::Tensor PointNetImpl::pooled(const torch::Tensor& cloud) {
   torch::Tensor x = cloud;
-  for (std::size_t i = 0; i < conv_.size(); ++i) x = torch::relu(per_point(bn_[i], conv_[i]->forward(x)));
+  for (std::size_t i = 0; i < conv_.size(); ++i) x = torch::relu(per_point(bn_[i], conv_[i]->forward(x), sum_.get()));
   return std::get<0>(x.max(/*dim=*/-2));
 }
 
-torch::Tensor PointNetImpl::forward(const torch::Tensor& cloud) {
-  const torch::Tensor h = dropout_->forward(torch::relu(fc_bn0_->forward(fc0_->forward(pooled(cloud)))));
-  return fc1_->forward(h);
+torch::Tensor PointNetImpl::forward(const torch::Tensor& cloud, const torch::Tensor& dropout_scale) {
+  const torch::Tensor h = torch::relu(normalize_batch(fc_bn0_, fc0_->forward(pooled(cloud)), sum_.get()));
+  return fc1_->forward(dropout_scale.defined() && is_training() ? h * dropout_scale : dropout_->forward(h));
 }
 
-MlpTrunk::MlpTrunk(nn::Module& owner, int input, const NetworkConfig& c) {
+MlpTrunk::MlpTrunk(nn::Module& owner, int input, const NetworkConfig& c, std::shared_ptr<BatchSum> sum)
+    : sum_(std::move(sum)) {
   for (int i = 0; i < c.layers; ++i) {
     fc_.push_back(owner.register_module("fc" + std::to_string(i), nn::Linear(input, c.hidden)));
     bn_.push_back(owner.register_module("bn" + std::to_string(i), batch_norm(c.hidden, c)));
@@ -107,11 +156,12 @@ MlpTrunk::MlpTrunk(nn::Module& owner, int input, const NetworkConfig& c) {
 }
 
 torch::Tensor MlpTrunk::forward(torch::Tensor x) {
-  for (std::size_t i = 0; i < fc_.size(); ++i) x = torch::relu(bn_[i]->forward(fc_[i]->forward(x)));
+  for (std::size_t i = 0; i < fc_.size(); ++i) x = torch::relu(normalize_batch(bn_[i], fc_[i]->forward(x), sum_.get()));
   return x;
 }
 
-EncoderImpl::EncoderImpl(const NetworkConfig& c) : trunk_(*this, c.observation + c.features + 2 * c.coefficients, c) {
+EncoderImpl::EncoderImpl(const NetworkConfig& c, std::shared_ptr<BatchSum> sum)
+    : trunk_(*this, c.observation + c.features + 2 * c.coefficients, c, std::move(sum)) {
   mean_ = register_module("mean", nn::Linear(c.hidden, c.latent));
   std_ = register_module("std", nn::Linear(c.hidden, c.latent));
 }
@@ -122,7 +172,8 @@ Posterior EncoderImpl::forward(const torch::Tensor& observation, const torch::Te
   return {mean_->forward(x), torch::nn::functional::softplus(std_->forward(x)) + 1e-4};
 }
 
-DecoderImpl::DecoderImpl(const NetworkConfig& c) : trunk_(*this, c.latent + c.observation + c.features, c) {
+DecoderImpl::DecoderImpl(const NetworkConfig& c, std::shared_ptr<BatchSum> sum)
+    : trunk_(*this, c.latent + c.observation + c.features, c, std::move(sum)) {
   out_ = register_module("out", nn::Linear(c.hidden, c.outputs));
   // Start near the output offsets (the training set's means): a small last layer.
   torch::NoGradGuard no_grad;
@@ -135,18 +186,23 @@ torch::Tensor DecoderImpl::forward(const torch::Tensor& z, const torch::Tensor& 
   return out_->forward(trunk_.forward(torch::cat({z, observation, features}, 1)));
 }
 
-CvaeImpl::CvaeImpl(const NetworkConfig& config, double dropout) : config_(config) {
+CvaeImpl::CvaeImpl(const NetworkConfig& config, double dropout)
+    : config_(config), batch_sum_(std::make_shared<BatchSum>()) {
   std::string error;
   if (!config.validate(&error)) throw std::invalid_argument("network: " + error);
   if (!(dropout >= 0 && dropout < 1))
     throw std::invalid_argument("network: dropout (" + std::to_string(dropout) + ") must be in [0, 1)");
   norm = register_module("norm", Normalization(config));
-  pointnet = register_module("pointnet", PointNet(config, dropout));
-  encoder = register_module("encoder", Encoder(config));
-  decoder = register_module("decoder", Decoder(config));
+  pointnet = register_module("pointnet", PointNet(config, dropout, batch_sum_));
+  encoder = register_module("encoder", Encoder(config, batch_sum_));
+  decoder = register_module("decoder", Decoder(config, batch_sum_));
 }
 
-torch::Tensor CvaeImpl::features(const torch::Tensor& cloud) { return pointnet->forward(norm->cloud->forward(cloud)); }
+void CvaeImpl::set_batch_sum(BatchSum sum) { *batch_sum_ = std::move(sum); }
+
+torch::Tensor CvaeImpl::features(const torch::Tensor& cloud, const torch::Tensor& dropout_scale) {
+  return pointnet->forward(norm->cloud->forward(cloud), dropout_scale);
+}
 
 Posterior CvaeImpl::encode(const torch::Tensor& observation, const torch::Tensor& features,
                            const torch::Tensor& expert_xi) {
@@ -218,18 +274,20 @@ torch::Tensor FrameTurn::outputs_out(const torch::Tensor& outputs, const Network
 }
 
 CvaeForward CvaeImpl::forward(const torch::Tensor& observation, const torch::Tensor& cloud,
-                              const torch::Tensor& expert_xi) {
+                              const torch::Tensor& expert_xi, const PassNoise* noise) {
+  const torch::Tensor dropout_scale = noise ? noise->dropout_scale : torch::Tensor();
+  auto eps = [&](const torch::Tensor& like) { return noise ? noise->eps : torch::randn_like(like); };
   if (!config_.target_frame) {
-    const torch::Tensor f = features(cloud);
+    const torch::Tensor f = features(cloud, dropout_scale);
     Posterior q = encode(observation, f, expert_xi);
-    const torch::Tensor z = q.mean + q.sigma * torch::randn_like(q.sigma);
+    const torch::Tensor z = q.mean + q.sigma * eps(q.sigma);
     return {decode(z, observation, f), std::move(q)};
   }
   const FrameTurn turn(observation);
   const torch::Tensor o = turn.observation_in(observation);
-  const torch::Tensor f = features(turn.cloud_in(cloud));
+  const torch::Tensor f = features(turn.cloud_in(cloud), dropout_scale);
   Posterior q = encode(o, f, turn.xi_in(expert_xi));
-  const torch::Tensor z = q.mean + q.sigma * torch::randn_like(q.sigma);
+  const torch::Tensor z = q.mean + q.sigma * eps(q.sigma);
   return {turn.outputs_out(decode(z, o, f), config_), std::move(q)};
 }
 

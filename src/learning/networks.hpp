@@ -16,6 +16,8 @@
 
 #include <torch/torch.h>
 
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -71,13 +73,35 @@ TORCH_MODULE(Normalization);
 // ---------------------------------------------------------------------------------------------------------
 // The networks (docs/learning.md, "Networks, in eval mode"). Inputs are already normalised.
 
+/// Sums a tensor over the processes of a data-parallel training, differentiably (the backward sums the
+/// gradients over the processes; learning/distributed.hpp). With one set, training-mode batch norm takes its
+/// statistics over the global batch, as one process would. Empty: one process.
+using BatchSum = std::function<torch::Tensor(const torch::Tensor&)>;
+
+/// Batch norm of x [M, channels]: bn itself, or in training mode with `sum` set, the same formulas over the
+/// rows of every process (running statistics updated alike on every process).
+torch::Tensor normalize_batch(torch::nn::BatchNorm1d& bn, const torch::Tensor& x, const BatchSum* sum);
+
+/// The random draws of one training pass (the latent noise and PointNet's dropout), drawn for the whole
+/// global batch from torch's CPU generator and then cut to a process's rows, so that a data-parallel run
+/// draws for every row what one process draws.
+struct PassNoise {
+  torch::Tensor eps;            ///< [B, Z], N(0, I)
+  torch::Tensor dropout_scale;  ///< [B, H_p], 0 or 1 / (1 - p); undefined when p = 0
+  /// Draws eps, then the dropout mask, on the CPU, and moves them to `device`.
+  static PassNoise draw(int64_t rows, const io::NetworkConfig& config, double dropout, torch::Device device);
+  /// Rows [begin, end).
+  PassNoise rows(int64_t begin, int64_t end) const;
+};
+
 /// Per-point shared layers (1x1 convolutions as Linear over the last dimension) with batch norm over batch
 /// and points, max pool over points, then fc0, batch norm, ReLU, dropout (training only) and fc1 to F features.
 class PointNetImpl : public torch::nn::Module {
  public:
-  PointNetImpl(const io::NetworkConfig& config, double dropout);
-  /// cloud: [B, C, 2], normalised. Returns [B, F].
-  torch::Tensor forward(const torch::Tensor& cloud);
+  PointNetImpl(const io::NetworkConfig& config, double dropout, std::shared_ptr<BatchSum> sum = nullptr);
+  /// cloud: [B, C, 2], normalised. Returns [B, F]. In training mode, dropout multiplies by `dropout_scale`
+  /// when it is given (PassNoise) and draws its own mask otherwise.
+  torch::Tensor forward(const torch::Tensor& cloud, const torch::Tensor& dropout_scale = {});
   /// The per-point part alone, max-pooled: [B, E] (for tests against the Eigen policy).
   torch::Tensor pooled(const torch::Tensor& cloud);
 
@@ -87,6 +111,7 @@ class PointNetImpl : public torch::nn::Module {
   torch::nn::Linear fc0_{nullptr}, fc1_{nullptr};
   torch::nn::BatchNorm1d fc_bn0_{nullptr};
   torch::nn::Dropout dropout_{nullptr};
+  std::shared_ptr<BatchSum> sum_;
 };
 TORCH_MODULE(PointNet);
 
@@ -94,12 +119,14 @@ TORCH_MODULE(PointNet);
 class MlpTrunk {
  public:
   MlpTrunk() = default;
-  MlpTrunk(torch::nn::Module& owner, int input, const io::NetworkConfig& config);
+  MlpTrunk(torch::nn::Module& owner, int input, const io::NetworkConfig& config,
+           std::shared_ptr<BatchSum> sum = nullptr);
   torch::Tensor forward(torch::Tensor x);
 
  private:
   std::vector<torch::nn::Linear> fc_;
   std::vector<torch::nn::BatchNorm1d> bn_;
+  std::shared_ptr<BatchSum> sum_;
 };
 
 struct Posterior {
@@ -110,7 +137,7 @@ struct Posterior {
 /// q(z | observation, features, expert trajectory): input [obs_n, features, xi_n] (O + F + 2n).
 class EncoderImpl : public torch::nn::Module {
  public:
-  explicit EncoderImpl(const io::NetworkConfig& config);
+  explicit EncoderImpl(const io::NetworkConfig& config, std::shared_ptr<BatchSum> sum = nullptr);
   Posterior forward(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& xi);
 
  private:
@@ -122,7 +149,7 @@ TORCH_MODULE(Encoder);
 /// p(outputs | z, observation, features): input [z, obs_n, features] (Z + O + F); returns raw [B, Y].
 class DecoderImpl : public torch::nn::Module {
  public:
-  explicit DecoderImpl(const io::NetworkConfig& config);
+  explicit DecoderImpl(const io::NetworkConfig& config, std::shared_ptr<BatchSum> sum = nullptr);
   torch::Tensor forward(const torch::Tensor& z, const torch::Tensor& observation, const torch::Tensor& features);
 
  private:
@@ -159,8 +186,11 @@ class CvaeImpl : public torch::nn::Module {
 
   void set_normalization(const NormalizationStats& stats) { norm->set(stats); }
 
-  /// PointNet features of raw clouds [B, C, 2] -> [B, F].
-  torch::Tensor features(const torch::Tensor& cloud);
+  /// Data-parallel training: batch norm's statistics summed by `sum` (see BatchSum; empty: this process's).
+  void set_batch_sum(BatchSum sum);
+
+  /// PointNet features of raw clouds [B, C, 2] -> [B, F] (dropout_scale: see PointNetImpl::forward).
+  torch::Tensor features(const torch::Tensor& cloud, const torch::Tensor& dropout_scale = {});
   /// q(z | observation, features, expert_xi) from raw observation [B, O] and expert_xi [B, 2n].
   Posterior encode(const torch::Tensor& observation, const torch::Tensor& features, const torch::Tensor& expert_xi);
   /// Decoder outputs y = raw * scale + offset, [B, Y], from z [B, Z] and raw observation [B, O].
@@ -168,8 +198,10 @@ class CvaeImpl : public torch::nn::Module {
   /// features(), encode() and decode() work in the network's frame: for a target-frame model (config().target_frame)
   /// the caller turns their inputs and outputs (FrameTurn). forward() and sample() take and return robot-centric
   /// tensors and turn by themselves.
-  /// Training pass: z = mu + sigma * eps with eps ~ N(0, I) from torch's global generator.
-  CvaeForward forward(const torch::Tensor& observation, const torch::Tensor& cloud, const torch::Tensor& expert_xi);
+  /// Training pass: z = mu + sigma * eps with eps and the dropout mask from `noise`, or drawn from torch's
+  /// global generator when it is null.
+  CvaeForward forward(const torch::Tensor& observation, const torch::Tensor& cloud, const torch::Tensor& expert_xi,
+                      const PassNoise* noise = nullptr);
 
   /// Inference: decoder outputs [B, Y] (robot-centric, before post-processing) of latent samples z [B, Z] for
   /// robot-centric observation [B, O] and cloud [B, C, 2].
@@ -183,6 +215,7 @@ class CvaeImpl : public torch::nn::Module {
 
  private:
   io::NetworkConfig config_;
+  std::shared_ptr<BatchSum> batch_sum_;  ///< shared with the submodules; empty function: one process
 };
 TORCH_MODULE(Cvae);
 

@@ -79,8 +79,9 @@ LossContext::LossContext(io::Variant variant, const projection::Settings& projec
     constants = std::make_shared<ProjectionConstants>(policy.projection, torch::kFloat32, device);
 }
 
-LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& c, double beta_t) {
-  const CvaeForward f = model.forward(batch.observation, batch.cloud, batch.expert_xi);
+LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& c, double beta_t,
+                       const PassNoise* noise) {
+  const CvaeForward f = model.forward(batch.observation, batch.cloud, batch.expert_xi, noise);
   const ProjectionInputs inputs =
       policy_outputs(f.outputs, batch.observation, batch.obstacles, c.policy, c.basis, c.network);
   LossTensors loss;
@@ -135,13 +136,31 @@ std::string resume_identity(const TrainingSettings& s, const Dataset& data) {
          " rows=" + std::to_string(data.rows()) + " projection=" + io::projection_settings_json(data.projection);
 }
 
+/// FNV-1a of the settings that shape every step and of the data's values: what the processes of one
+/// data-parallel training must share.
+std::uint64_t training_fingerprint(const TrainingSettings& s, const Dataset& data) {
+  std::string text = resume_identity(s, data);
+  char numbers[256];
+  std::snprintf(numbers, sizeof numbers, " steps=%lld lr=%.17g lr_final=%.17g beta=%.17g warmup=%lld share=%.17g",
+                static_cast<long long>(s.steps), s.learning_rate, s.learning_rate_final, s.beta,
+                static_cast<long long>(s.kl_warmup_steps), s.validation_share);
+  text += numbers;
+  for (const torch::Tensor& t : {data.observation, data.cloud, data.obstacles, data.expert_xi, data.episode}) {
+    std::snprintf(numbers, sizeof numbers, " %.17g", t.to(torch::kFloat64).sum().item<double>());
+    text += numbers;
+  }
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 }  // namespace
 
-Trainer::Trainer(const TrainingSettings& settings, Dataset data)
-    : settings_(settings), data_(std::move(data)), device_(parse_device(settings.device)) {
+Trainer::Trainer(const TrainingSettings& settings, Dataset data, std::shared_ptr<ProcessGroup> group)
+    : settings_(settings), data_(std::move(data)), device_(parse_device(settings.device)), group_(std::move(group)) {
   settings_.network.cloud_points = static_cast<int>(data_.cloud_points());
   settings_.network.nearest_points = static_cast<int>(data_.nearest_points());
   settings_.network.coefficients = data_.coefficients();
@@ -163,7 +182,24 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data)
   context_ = std::make_unique<LossContext>(settings_.variant, data_.projection, settings_.band, settings_.network,
                                            settings_.iterations, settings_.plain_projection, device_);
   sampler_ = std::make_unique<BatchSampler>(split_.train, settings_.batch, settings_.seed);
+
+  if (distributed()) {
+    if (std::min(settings_.batch, split_.train.numel()) < group_->size())
+      throw std::invalid_argument("training settings: the batch (" + std::to_string(settings_.batch) +
+                                  ", or the training rows) must hold at least one row per process (" +
+                                  std::to_string(group_->size()) + ")");
+    group_->require_same(training_fingerprint(settings_, data_), "the dataset or the training settings");
+    // Identical by construction (same seed, same data); rank 0's copy is sent anyway, as DDP does.
+    torch::NoGradGuard no_grad;
+    for (torch::Tensor p : model_->parameters()) group_->broadcast(p);
+    for (torch::Tensor b : model_->buffers()) group_->broadcast(b);
+    ProcessGroup* g = group_.get();
+    model_->set_batch_sum([g](const torch::Tensor& t) { return g->differentiable_sum(t); });
+  }
 }
+
+bool Trainer::distributed() const { return group_ && group_->size() > 1; }
+bool Trainer::writes_files() const { return !group_ || group_->rank() == 0; }
 
 void Trainer::reseed(int64_t stream) const {
   torch::manual_seed(mix(settings_.seed, static_cast<std::uint64_t>(stream)));
@@ -172,16 +208,61 @@ void Trainer::reseed(int64_t stream) const {
 LossTerms Trainer::step() {
   reseed(step_);
   model_->train();
-  const Batch batch = data_.gather(sampler_->indices(step_), device_);
+  // The step's global batch and its random draws are the same on every process; each takes its share of the
+  // rows (contiguous, sizes differing by at most one).
+  const torch::Tensor indices = sampler_->indices(step_);
+  const int64_t rows = indices.numel();
+  const int64_t parts = distributed() ? group_->size() : 1, part = distributed() ? group_->rank() : 0;
+  const int64_t begin = rows * part / parts, end = rows * (part + 1) / parts;
+  const PassNoise noise = PassNoise::draw(rows, settings_.network, settings_.dropout, device_);
+  const PassNoise share_noise = noise.rows(begin, end);
+  const Batch batch = data_.gather(indices.index({Slice(begin, end)}), device_);
   const double lr = learning_rate_at(settings_.learning_rate, settings_.learning_rate_final, step_, settings_.steps);
   for (auto& group : optimizer_->param_groups())
     static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
   optimizer_->zero_grad();
-  const LossTensors loss = batch_loss(*model_, batch, *context_, kl_weight(settings_.beta, step_, settings_.kl_warmup_steps));
-  loss.total.backward();
+  const LossTensors loss = batch_loss(*model_, batch, *context_, kl_weight(settings_.beta, step_, settings_.kl_warmup_steps),
+                                      &share_noise);
+  LossTerms terms;
+  if (!distributed()) {
+    loss.total.backward();
+    terms = loss.values();
+  } else {
+    // The loss terms are means over the rows: weighted by each share, their sum over the processes is the
+    // global batch's mean, and so is the sum of the gradients.
+    const double weight = static_cast<double>(end - begin) / static_cast<double>(rows);
+    (loss.total * weight).backward();
+    terms = sum_gradients(loss.values(), weight);
+  }
   optimizer_->step();
   ++step_;
-  return loss.values();
+  return terms;
+}
+
+LossTerms Trainer::sum_gradients(const LossTerms& share, double weight) {
+  // One all-reduce per step: every gradient, flattened, then the four weighted loss terms.
+  std::vector<torch::Tensor> pieces;
+  std::vector<torch::Tensor> parameters = model_->parameters();
+  for (torch::Tensor& p : parameters) {
+    if (!p.grad().defined()) p.mutable_grad() = torch::zeros_like(p);
+    pieces.push_back(p.grad().reshape({-1}));
+  }
+  const auto options = torch::TensorOptions().dtype(torch::kFloat32).device(device_);
+  pieces.push_back(torch::tensor({share.total * weight, share.mse * weight, share.kl * weight, share.residual * weight},
+                                 torch::kFloat64)
+                       .to(options));
+  torch::Tensor flat = torch::cat(pieces);
+  group_->sum(flat);
+  int64_t offset = 0;
+  torch::NoGradGuard no_grad;
+  for (torch::Tensor& p : parameters) {
+    const int64_t n = p.numel();
+    p.mutable_grad().copy_(flat.index({Slice(offset, offset + n)}).view_as(p));
+    offset += n;
+  }
+  const torch::Tensor loss = flat.index({Slice(offset, offset + 4)}).to(torch::kCPU, torch::kFloat64);
+  const auto v = loss.accessor<double, 1>();
+  return {v[0], v[1], v[2], v[3]};
 }
 
 std::optional<LossTerms> Trainer::validate() {
@@ -230,14 +311,17 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
     summary.history.push_back(terms);
     report_sum += terms;
     elapsed_seconds_ = elapsed();
-    const bool out_of_time = settings_.max_seconds > 0 && seconds_since(start) >= settings_.max_seconds;
+    bool out_of_time = settings_.max_seconds > 0 && seconds_since(start) >= settings_.max_seconds;
+    if (distributed() && settings_.max_seconds > 0) out_of_time = group_->any(out_of_time);  // all stop together
     const bool last = step_ == settings_.steps || out_of_time;
-    if ((settings_.validation_every > 0 && step_ % settings_.validation_every == 0) || last)
+    // Validation and checkpoints: rank 0's (every process holds the same model).
+    if (writes_files() && ((settings_.validation_every > 0 && step_ % settings_.validation_every == 0) || last))
       if (auto v = validate()) {
         pending.validation = v;
-        if (last) summary.validation = v;
+        summary.validation = v;
+        summary.validation_step = step_;
       }
-    if (!settings_.checkpoint_path.empty() &&
+    if (writes_files() && !settings_.checkpoint_path.empty() &&
         ((settings_.checkpoint_every > 0 && step_ % settings_.checkpoint_every == 0) || last)) {
       save_checkpoint(settings_.checkpoint_path);
       pending.checkpoint = settings_.checkpoint_path;
@@ -268,7 +352,7 @@ TrainingSummary Trainer::run(const std::function<void(const TrainingProgress&)>&
   summary.steps = step_;
   summary.seconds = elapsed_seconds_;
   summary.final_loss = recent_mean(summary.history);
-  if (summary.history.empty()) summary.validation = validate();  // resumed at the end: nothing ran
+  if (summary.history.empty() && writes_files()) summary.validation = validate();  // resumed at the end
   return summary;
 }
 

@@ -14,7 +14,9 @@
 //
 // Reproducibility: every step reseeds torch's generators from (seed, step), and the batch of a step depends
 // only on (seed, step), so a run resumed from a checkpoint repeats the loss trajectory of an uninterrupted
-// one (bit for bit on the CPU with a fixed thread count).
+// one (bit for bit on the CPU with a fixed thread count). The batch's random draws (latent noise, dropout) are
+// made for the whole batch (PassNoise), so that W data-parallel processes (learning/distributed.hpp, a
+// ProcessGroup given to the Trainer) train the model one process trains, to float rounding.
 #pragma once
 
 #include <torch/torch.h>
@@ -27,6 +29,7 @@
 #include <vector>
 
 #include "learning/dataset.hpp"
+#include "learning/distributed.hpp"
 #include "learning/networks.hpp"
 #include "learning/projection.hpp"
 
@@ -97,7 +100,9 @@ struct LossContext {
 };
 
 /// The loss of one batch (docs/learning.md, "Training"); the model's mode (train/eval) is the caller's.
-LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& context, double beta_t);
+/// `noise`: the pass's random draws (PassNoise); null: the model draws its own.
+LossTensors batch_loss(CvaeImpl& model, const Batch& batch, const LossContext& context, double beta_t,
+                       const PassNoise* noise = nullptr);
 
 struct TrainingProgress {
   int64_t step = 0, steps = 0;  ///< steps done, steps in all
@@ -113,7 +118,8 @@ struct TrainingSummary {
   int64_t steps = 0;
   double seconds = 0;           ///< training time, resumed runs included
   LossTerms final_loss;         ///< mean over the last (up to 100) steps
-  std::optional<LossTerms> validation;  ///< at the end, when there are validation rows
+  std::optional<LossTerms> validation;  ///< the latest (at the end of a run), when there are validation rows
+  int64_t validation_step = -1;         ///< the step `validation` was computed at
   std::vector<LossTerms> history;       ///< every step of this run
 };
 
@@ -121,7 +127,10 @@ class Trainer {
  public:
   /// Builds the model (sizes from the data), the normalisation from the training rows and the optimizer.
   /// Throws std::invalid_argument on unusable settings, std::runtime_error when CUDA is asked for and absent.
-  Trainer(const TrainingSettings& settings, Dataset data);
+  /// With a `group` of several processes (learning/distributed.hpp), each process computes its share of every
+  /// batch and the gradients are summed: every process must pass the same settings and data (checked), and
+  /// only rank 0 validates and writes checkpoints. Throws std::runtime_error when the processes differ.
+  Trainer(const TrainingSettings& settings, Dataset data, std::shared_ptr<ProcessGroup> group = nullptr);
 
   /// One optimisation step at the current step index; returns its loss terms.
   LossTerms step();
@@ -142,6 +151,10 @@ class Trainer {
   void load_checkpoint(const std::string& path);
 
   int64_t current_step() const { return step_; }
+  /// Several processes train together.
+  bool distributed() const;
+  /// This process writes checkpoints and models, and reports (rank 0, or the only process).
+  bool writes_files() const;
   double elapsed_seconds() const { return elapsed_seconds_; }
   Cvae& model() { return model_; }
   const TrainingSettings& settings() const { return settings_; }
@@ -153,6 +166,8 @@ class Trainer {
 
  private:
   void reseed(int64_t stream) const;
+  /// Sums the gradients and the loss terms (each weighted by `weight`, this process's share) over the group.
+  LossTerms sum_gradients(const LossTerms& share, double weight);
 
   TrainingSettings settings_;
   Dataset data_;
@@ -164,6 +179,7 @@ class Trainer {
   std::unique_ptr<BatchSampler> sampler_;
   int64_t step_ = 0;
   double elapsed_seconds_ = 0;
+  std::shared_ptr<ProcessGroup> group_;
 };
 
 /// "AMD EPYC 7B13 (1 thread)" from /proc/cpuinfo, or the CUDA device's name ("NVIDIA H100 80GB HBM3").

@@ -472,3 +472,62 @@ TEST_F(Training, TimeLimitEndsTheRunAsAtItsLastStep) {
   EXPECT_FALSE(s.validate(&error));
   EXPECT_NE(error.find("learning_rate_final"), std::string::npos) << error;
 }
+
+namespace {
+
+// Batch norm over the processes' rows (normalize_batch with a BatchSum, as data-parallel training uses it):
+// with one process (the sum of one is the identity) it must be torch's own batch norm, in its output, its
+// gradients and its running statistics. Two batch norms start equal; one runs torch's, the other ours.
+TEST(DistributedBatchNorm, OneProcessIsTorchsBatchNorm) {
+  torch::manual_seed(3);
+  auto options = torch::nn::BatchNorm1dOptions(5).eps(1e-5);
+  torch::nn::BatchNorm1d ours(options), torchs(options);
+  {
+    torch::NoGradGuard no_grad;
+    torchs->weight.copy_(torch::rand({5}) + 0.5);
+    torchs->bias.copy_(torch::randn({5}));
+    ours->weight.copy_(torchs->weight);
+    ours->bias.copy_(torchs->bias);
+  }
+  const torch::Tensor x = torch::randn({12, 5}) * 3 + 1;
+  const torch::Tensor weights = torch::randn({12, 5});  // a loss that is not symmetric in the rows
+  const learning::BatchSum identity = [](const torch::Tensor& t) { return t; };
+  torch::Tensor x_ours = x.clone().requires_grad_(true), x_torchs = x.clone().requires_grad_(true);
+  const torch::Tensor y_ours = learning::normalize_batch(ours, x_ours, &identity);
+  const torch::Tensor y_torchs = torchs->forward(x_torchs);
+  EXPECT_TRUE(torch::allclose(y_ours, y_torchs, 1e-5, 1e-5));
+  (y_ours * weights).sum().backward();
+  (y_torchs * weights).sum().backward();
+  EXPECT_TRUE(torch::allclose(x_ours.grad(), x_torchs.grad(), 1e-4, 1e-5));
+  EXPECT_TRUE(torch::allclose(ours->weight.grad(), torchs->weight.grad(), 1e-4, 1e-5));
+  EXPECT_TRUE(torch::allclose(ours->bias.grad(), torchs->bias.grad(), 1e-4, 1e-5));
+  EXPECT_TRUE(torch::allclose(ours->running_mean, torchs->running_mean, 1e-5, 1e-6));
+  EXPECT_TRUE(torch::allclose(ours->running_var, torchs->running_var, 1e-5, 1e-6));
+  EXPECT_EQ(ours->num_batches_tracked.item<int64_t>(), torchs->num_batches_tracked.item<int64_t>());
+  // In eval mode, both use the running statistics alone.
+  ours->eval();
+  torchs->eval();
+  EXPECT_TRUE(torch::allclose(learning::normalize_batch(ours, x, &identity), torchs->forward(x), 1e-5, 1e-5));
+}
+
+// A training's random draws are made for the whole batch: a process's rows of them are the rows of the
+// whole draw, whatever the other processes take.
+TEST(DistributedBatchNorm, PassNoiseRowsAreTheWholeDrawsRows) {
+  io::NetworkConfig config;
+  torch::manual_seed(11);
+  const learning::PassNoise whole = learning::PassNoise::draw(10, config, 0.3, torch::kCPU);
+  ASSERT_TRUE(whole.dropout_scale.defined());
+  const learning::PassNoise part = whole.rows(3, 7);
+  EXPECT_TRUE(torch::equal(part.eps, whole.eps.index({torch::indexing::Slice(3, 7)})));
+  EXPECT_TRUE(torch::equal(part.dropout_scale, whole.dropout_scale.index({torch::indexing::Slice(3, 7)})));
+  // Dropout keeps a share 1 - p of the units, scaled by 1 / (1 - p).
+  const torch::Tensor kept = whole.dropout_scale > 0;
+  EXPECT_NEAR(kept.to(torch::kFloat64).mean().item<double>(), 0.7, 0.1);
+  EXPECT_TRUE(torch::allclose(whole.dropout_scale.index({kept}), torch::full({1}, 1.0f / 0.7f)));
+  torch::manual_seed(11);
+  const learning::PassNoise again = learning::PassNoise::draw(10, config, 0.3, torch::kCPU);
+  EXPECT_TRUE(torch::equal(again.eps, whole.eps));
+  EXPECT_FALSE(learning::PassNoise::draw(10, config, 0.0, torch::kCPU).dropout_scale.defined());
+}
+
+}  // namespace

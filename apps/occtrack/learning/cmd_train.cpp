@@ -4,18 +4,27 @@
 //                [--snapshot-every N]
 //                [--hidden H] [--layers L] [--features F] [--pointnet-hidden HP] [--pointnet-widths W,...]
 //                [--latent Z] [--dropout P] [--validation-share S] [--validation-every N] [--plain-projection]
+//                [--loss-log FILE.csv] [--world-size W --rank R --rendezvous FILE|HOST:PORT]
+//
+// Data-parallel (docs/scaling.md): W processes, started by hand with --world-size, --rank and --rendezvous, or
+// by mpirun / srun (rank and size from the launcher; --rendezvous still names where they meet), each compute
+// their share of every batch; rank 0 prints, validates and writes checkpoints, snapshots and the model.
 //
 // Trains the policy end to end through the unrolled projection (shared/spec/policy.md, docs/learning.md) and
 // writes the model file. Progress (step, loss terms, steps/s, ETA) goes to standard error every few
 // seconds; the summary to standard output.
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <sstream>
+#include <thread>
 
 #include "../cli_support.hpp"
 #include "../commands.hpp"
+#include "../launcher.hpp"
 #include "allocation.hpp"
 #include "learning/dataset.hpp"
+#include "learning/distributed.hpp"
 #include "learning/export.hpp"
 #include "learning/trainer.hpp"
 
@@ -31,6 +40,10 @@ struct TrainOptions {
   std::string resume;
   int threads = 0;
   int64_t snapshot_every = 0;  ///< write the model every this many steps beside --out (0: only at the end)
+  std::string loss_log;        ///< CSV of every step's loss terms (rank 0)
+  int world_size = 0;          ///< 0: one process, or the launcher's size
+  int rank = -1;               ///< -1: 0, or the launcher's rank
+  learning::DistributedSettings distributed;
   learning::TrainingSettings settings;
 };
 
@@ -80,6 +93,7 @@ std::string canonical_command(const TrainOptions& o) {
   if (s.learning_rate_final >= 0) c << " --lr-final " << s.learning_rate_final;
   if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
   if (s.plain_projection) c << " --plain-projection";
+  if (o.distributed.world_size > 1) c << " --world-size " << o.distributed.world_size;
   if (!o.resume.empty()) c << " --resume " << o.resume;
   if (o.snapshot_every > 0) c << " --snapshot-every " << o.snapshot_every;
   return c.str();
@@ -90,15 +104,43 @@ int run(TrainOptions o) {
   keep_large_allocations();
   o.settings.variant = io::parse_variant(o.variant);
   o.settings.network.target_frame = o.frame == "target";
-  if (o.threads > 0) torch::set_num_threads(o.threads);
   if (o.settings.checkpoint_path.empty() && !o.resume.empty()) o.settings.checkpoint_path = o.resume;
 
+  // Processes: the options, else the launcher's (mpirun, srun), else one.
+  const std::optional<LauncherRanks> launcher = launcher_ranks();
+  learning::DistributedSettings& d = o.distributed;
+  d.world_size = o.world_size > 0 ? o.world_size : launcher ? launcher->size : 1;
+  d.rank = o.rank >= 0 ? o.rank : launcher && o.world_size == 0 ? launcher->rank : 0;
+  std::string error;
+  if (!d.validate(&error)) {
+    std::cerr << who << error << " (--world-size, --rank, --rendezvous)\n";
+    return kExitInputError;
+  }
+  if (d.world_size > 1 && !learning::distributed_training_available()) {
+    std::cerr << who << "--world-size " << d.world_size
+              << ": this occtrack was built without LibTorch's Gloo backend (install libgloo-dev and build again)\n";
+    return kExitInputError;
+  }
+  const bool reports = d.rank == 0;
+  // Threads: as asked; else, with several processes on this machine, the cores shared out among them.
+  const int local_processes = launcher && launcher->local_size > 0 ? launcher->local_size : 1;
+  if (o.threads > 0)
+    torch::set_num_threads(o.threads);
+  else if (local_processes > 1)
+    torch::set_num_threads(std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / local_processes));
+
   learning::Dataset data = learning::load_dataset(o.data);
-  std::fprintf(stderr, "%sloaded %lld rows from %zu file(s): cloud %lld points, %lld obstacle points, n = %d, m = %d\n",
+  std::shared_ptr<learning::ProcessGroup> group;
+  if (d.world_size > 1) {
+    if (reports)
+      std::fprintf(stderr, "%swaiting for %d processes at %s\n", who, d.world_size, d.rendezvous.c_str());
+    group = std::make_shared<learning::ProcessGroup>(d);
+  }
+  if (reports) std::fprintf(stderr, "%sloaded %lld rows from %zu file(s): cloud %lld points, %lld obstacle points, n = %d, m = %d\n",
                who, static_cast<long long>(data.rows()), data.files.size(), static_cast<long long>(data.cloud_points()),
                static_cast<long long>(data.nearest_points()), data.coefficients(), data.projection.steps);
-  learning::Trainer trainer(o.settings, std::move(data));
-  std::fprintf(stderr, "%s%s (%s frame) on %s, %lld training rows (%lld episodes), %lld validation rows (%lld "
+  learning::Trainer trainer(o.settings, std::move(data), group);
+  if (reports) std::fprintf(stderr, "%s%s (%s frame) on %s, %lld training rows (%lld episodes), %lld validation rows (%lld "
                "episodes), K = %d (%s projection backward)\n",
                who, io::to_string(o.settings.variant), o.frame.c_str(),
                learning::hardware_description(trainer.device()).c_str(),
@@ -107,13 +149,29 @@ int run(TrainOptions o) {
                static_cast<long long>(trainer.split().validation.numel()),
                static_cast<long long>(trainer.split().validation_episodes), o.settings.iterations,
                o.settings.plain_projection ? "plain" : "fast");
+  if (group && reports)
+    std::fprintf(stderr, "%s%d processes, each %lld of every %lld rows, %d threads each\n", who, d.world_size,
+                 static_cast<long long>(std::min<int64_t>(o.settings.batch, trainer.split().train.numel()) / d.world_size),
+                 static_cast<long long>(std::min<int64_t>(o.settings.batch, trainer.split().train.numel())),
+                 torch::get_num_threads());
+  std::ofstream loss_log;
+  if (reports && !o.loss_log.empty()) {
+    loss_log.open(o.loss_log);
+    if (!loss_log) {
+      std::cerr << who << "--loss-log: cannot write '" << o.loss_log << "'\n";
+      return kExitInputError;
+    }
+    loss_log << "step,total,mse,kl,residual,validation_total,validation_mse,validation_kl,validation_residual\n";
+    loss_log.precision(9);
+  }
   if (!o.resume.empty()) {
     trainer.load_checkpoint(o.resume);
-    std::fprintf(stderr, "%sresumed from %s at step %lld\n", who, o.resume.c_str(),
+    if (reports) std::fprintf(stderr, "%sresumed from %s at step %lld\n", who, o.resume.c_str(),
                  static_cast<long long>(trainer.current_step()));
   }
 
   const learning::TrainingSummary summary = trainer.run([&](const learning::TrainingProgress& p) {
+    if (!reports) return;
     std::string line = "step " + std::to_string(p.step) + "/" + std::to_string(p.steps) + "  " + loss_text(p.loss);
     char rate[96];
     std::snprintf(rate, sizeof rate, "  %.2f steps/s  elapsed %s  ETA %s", p.steps_per_second,
@@ -124,6 +182,18 @@ int run(TrainOptions o) {
     std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
   }, [&](int64_t step, const learning::TrainingSummary& so_far) {
+    if (!reports) return;
+    if (loss_log.is_open()) {
+      const learning::LossTerms& l = so_far.history.back();
+      loss_log << step << ',' << l.total << ',' << l.mse << ',' << l.kl << ',' << l.residual;
+      if (so_far.validation && so_far.validation_step == step) {
+        const learning::LossTerms& v = *so_far.validation;
+        loss_log << ',' << v.total << ',' << v.mse << ',' << v.kl << ',' << v.residual;
+      } else {
+        loss_log << ",,,,";
+      }
+      loss_log << '\n';
+    }
     // Snapshots for choosing a model in closed loop (docs/learning.md, "Choosing the model"): each a complete
     // model file, its metadata as at that step.
     if (o.snapshot_every <= 0 || step % o.snapshot_every != 0 || step >= o.settings.steps) return;
@@ -138,6 +208,7 @@ int run(TrainOptions o) {
                  at.validation ? ("  validation " + loss_text(*at.validation)).c_str() : "");
   });
 
+  if (!reports) return kExitOk;  // rank 0 writes the model
   learning::export_model(o.out, *trainer.model(), trainer.model_metadata(summary, created_by(canonical_command(o))));
   std::printf("trained %s for %lld steps in %s: final %s\n", io::to_string(o.settings.variant),
               static_cast<long long>(summary.steps), duration_text(summary.seconds).c_str(),
@@ -210,6 +281,19 @@ void add_train_command(CLI::App& app, int& exit_code) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--progress-seconds", s.progress_seconds, "Seconds between progress lines")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--loss-log", o->loss_log, "Write every step's loss terms to this CSV file (step, total, mse, kl, residual; then the validation "
+                  "loss's at the steps it is computed)");
+  add_bounded_option(cmd, "--world-size", o->world_size,
+                     "Data-parallel: processes in all (default: the launcher's under mpirun or srun, else 1)", 1, 1 << 16);
+  add_bounded_option(cmd, "--rank", o->rank, "Data-parallel: this process, 0 .. world size - 1 (rank 0 writes)", 0,
+                     (1 << 16) - 1);
+  cmd->add_option("--rendezvous", o->distributed.rendezvous,
+                  "Data-parallel: where the processes meet: a FILE every process can open (fresh), or HOST:PORT "
+                  "where rank 0 listens");
+  cmd->add_option("--dist-timeout", o->distributed.timeout_seconds,
+                  "Data-parallel: seconds to wait for the other processes (joining, each exchange)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   set_command_body(cmd, exit_code, [o] { return run(*o); });
