@@ -25,9 +25,10 @@ inline std::optional<int> environment_int(const char* name) {
 }
 }  // namespace detail
 
-/// Open MPI's mpirun (OMPI_COMM_WORLD_*), or MPICH / Intel MPI / srun --mpi=pmi2 (PMI_RANK, PMI_SIZE,
-/// MPI_LOCALNRANKS); nullopt when none is set. Slurm's own SLURM_PROCID and SLURM_NTASKS are not read: a
-/// batch script sees them too, as "rank 0 of N", where it is one process.
+/// Open MPI's mpirun (OMPI_COMM_WORLD_*), MPICH / Intel MPI / srun --mpi=pmi2 (PMI_RANK, PMI_SIZE,
+/// MPI_LOCALNRANKS), or srun --mpi=pmix (PMIX_RANK, and the step's SLURM_STEP_NUM_TASKS: PMIx itself puts no
+/// size in the environment); nullopt when none is set. Slurm's own SLURM_PROCID and SLURM_NTASKS are not
+/// read: a batch script sees them too, as "rank 0 of N", where it is one process.
 inline std::optional<LauncherRanks> launcher_ranks() {
   using detail::environment_int;
   struct Names {
@@ -36,6 +37,8 @@ inline std::optional<LauncherRanks> launcher_ranks() {
   static const Names kLaunchers[] = {
       {"OMPI_COMM_WORLD_RANK", "OMPI_COMM_WORLD_SIZE", "OMPI_COMM_WORLD_LOCAL_SIZE"},
       {"PMI_RANK", "PMI_SIZE", "MPI_LOCALNRANKS"},
+      // SLURM_STEP_TASKS_PER_NODE is a plain number only on one machine ("2"; "2(x3)" on several: 0 here).
+      {"PMIX_RANK", "SLURM_STEP_NUM_TASKS", "SLURM_STEP_TASKS_PER_NODE"},
   };
   for (const Names& n : kLaunchers) {
     const auto rank = environment_int(n.rank), size = environment_int(n.size);
