@@ -11,15 +11,23 @@
 // whose seeds are outside the benchmark's 1000-1999, labelled by the offline Proj-CEM expert, written as one
 // safetensors file. `info` prints a file's metadata, tensor shapes and statistics; `merge` concatenates
 // files made with the same projection and perception settings (episode indices renumbered).
+//
+// `mpirun -n R occtrack dataset generate ...` shares the episodes among R ranks (docs/scaling.md,
+// "Demonstrations under MPI"): rank k runs episodes k, k + R, ... on its threads, and rank 0 writes the one
+// file, byte for byte the file one process writes.
+#include <chrono>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
-#include <thread>
 
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
+#include "launcher.hpp"
+#include "mpi_world.hpp"
 #include "occtrack/io/dataset_file.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/sim/demonstrations.hpp"
@@ -38,7 +46,7 @@ struct GenerateOptions {
   int label_every = 1;
   std::string driver = "expert";
   std::string model;
-  int jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  std::optional<int> jobs;  ///< default: MpiWorld::default_threads()
   // The offline expert's preset (planners::ProjCemSettings::offline_expert), overridable.
   int expert_samples = planners::ProjCemSettings::offline_expert(1).samples;
   int expert_iterations = planners::ProjCemSettings::offline_expert(1).cem_iterations;
@@ -118,83 +126,45 @@ std::string duration_text(double seconds) {
   return text;
 }
 
-int generate(const GenerateOptions& o) {
-  const char* const who = "occtrack dataset generate: ";
-  sim::DemonstrationSettings s;
-  s.episodes = o.episodes;
-  s.first_seed = o.seed;
-  s.worlds.clear();
-  for (const std::string& name : o.worlds) {
-    const auto world = sim::parse_demonstration_world(name);
-    if (!world) {
-      std::cerr << who << "--worlds: unknown world kind '" << name
-                << "' (forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, sixwall-sliding, random)\n";
-      return kExitInputError;
-    }
-    s.worlds.push_back(*world);
-  }
-  s.target_speeds = o.speeds;
-  const auto target = sim::parse_demonstration_target(o.target);
-  if (!target) {
-    std::cerr << who << "--target: must be smooth or teleop, got '" << o.target << "'\n";
-    return kExitInputError;
-  }
-  s.target = *target;
-  if (o.episode.latency_auto()) {
-    std::cerr << who << "--latency: give a number of ms; auto is measured per planner in `bench` and `run` only\n";
-    return kExitInputError;
-  }
-  try {
-    s.episode = o.episode.settings();
-    s.driver_options = o.episode.planner_settings(&s.episode);
-  } catch (const std::invalid_argument& e) {
-    std::cerr << who << e.what() << "\n";
-    return kExitInputError;
-  }
-  s.duration = o.duration;
-  s.label_every = o.label_every;
-  s.driver = o.driver;
-  s.model = o.model;
-  s.jobs = o.jobs;
-  s.expert = planners::ProjCemSettings::offline_expert(1);
-  s.expert.samples = o.expert_samples;
-  s.expert.cem_iterations = o.expert_iterations;
-  s.expert.settle_distance = o.expert_settle;
-  s.created_by = created_by(canonical_command(o));
-  std::string error;
-  if (!s.validate(&error)) {
-    std::cerr << who << option_of(error) << error << "\n";
-    return kExitInputError;
-  }
-  if (!o.model.empty() && o.driver == "expert") {
-    std::cerr << who << "--model: only a learned --driver uses a model (the driver is the expert)\n";
-    return kExitInputError;
-  }
+/// A shard's report travels to rank 0 in its dataset's metadata, under this key (taken out before the
+/// shards are interleaved, so it never reaches the file).
+constexpr const char* kShardReportKey = "occtrack.shard_report";
 
-  const int jobs = std::min(o.jobs, o.episodes);
-  std::fprintf(stderr,
-               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; %s target, top speeds %s m/s), driver "
-               "%s%s, expert %d samples x %d CEM iterations, labelling 1 cycle in %d, latency %s, tau %g s, %d jobs\n",
-               o.episodes, o.duration, static_cast<unsigned long long>(o.seed),
-               static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)), join(o.worlds).c_str(),
-               o.target.c_str(), speeds_text(o).c_str(), o.driver.c_str(),
-               o.driver != "expert" && s.driver_options.shield ? " (shield on)" : "", o.expert_samples,
-               o.expert_iterations, o.label_every, o.episode.latency.c_str(), o.episode.tau, jobs);
-  Progress progress("dataset");
-  sim::DemonstrationReport report;
-  const sim::Demonstrations data = sim::generate_demonstrations(s, &report, [&](const sim::DemonstrationProgress& p) {
-    std::string detail = "episodes " + std::to_string(p.episodes_done) + "/" + std::to_string(p.episodes_total) +
-                         ", " + std::to_string(p.rows) + " rows, " + duration_text(p.elapsed_s);
-    if (p.fraction > 0.01 && p.fraction < 1.0)
-      detail += ", ETA " + duration_text(p.elapsed_s * (1.0 - p.fraction) / p.fraction);
-    progress.update(p.fraction, detail);
-  });
-  io::write_dataset_file(o.out, data);
+std::string report_json(const sim::DemonstrationReport& r) {
+  return nlohmann::json{{"episodes", r.episodes},
+                        {"episodes_failed", r.episodes_failed},
+                        {"failures", r.failures},
+                        {"cycles", r.cycles},
+                        {"labelled", r.labelled},
+                        {"rows", r.rows},
+                        {"skipped_failed", r.skipped_failed},
+                        {"skipped_nonfinite", r.skipped_nonfinite},
+                        {"expert_ms", r.expert_ms},
+                        {"seconds", r.seconds}}
+      .dump();
+}
 
+sim::DemonstrationReport report_from_json(const std::string& text) {
+  const nlohmann::json j = nlohmann::json::parse(text);
+  sim::DemonstrationReport r;
+  r.episodes = j.at("episodes").get<int>();
+  r.episodes_failed = j.at("episodes_failed").get<int>();
+  r.failures = j.at("failures").get<std::vector<std::string>>();
+  r.cycles = j.at("cycles").get<std::int64_t>();
+  r.labelled = j.at("labelled").get<std::int64_t>();
+  r.rows = j.at("rows").get<std::int64_t>();
+  r.skipped_failed = j.at("skipped_failed").get<std::int64_t>();
+  r.skipped_nonfinite = j.at("skipped_nonfinite").get<std::int64_t>();
+  r.expert_ms = j.at("expert_ms").get<double>();
+  r.seconds = j.at("seconds").get<double>();
+  return r;
+}
+
+void print_summary(const std::string& out, const sim::DemonstrationReport& report) {
   for (const std::string& failure : report.failures) std::fprintf(stderr, "skipped episode %s\n", failure.c_str());
   const double rate = report.seconds > 0 ? static_cast<double>(report.rows) / report.seconds : 0.0;
   std::printf("wrote %s: %lld rows from %d episodes (%d skipped by the scenario generator) in %.1f s, %.2f rows/s\n",
-              o.out.c_str(), static_cast<long long>(report.rows), report.episodes, report.episodes_failed,
+              out.c_str(), static_cast<long long>(report.rows), report.episodes, report.episodes_failed,
               report.seconds, rate);
   std::printf("  cycles %lld, labelled %lld, skipped %lld (expert failed %lld, non-finite %lld); "
               "expert %.1f ms per labelled cycle\n",
@@ -202,6 +172,144 @@ int generate(const GenerateOptions& o) {
               static_cast<long long>(report.skipped()), static_cast<long long>(report.skipped_failed),
               static_cast<long long>(report.skipped_nonfinite),
               report.labelled > 0 ? report.expert_ms / static_cast<double>(report.labelled) : 0.0);
+}
+
+using ProgressCallback = std::function<void(const sim::DemonstrationProgress&)>;
+
+/// `generate` with several ranks: rank k runs shard k of the episodes and hands it to rank 0 as a dataset file
+/// in memory (safetensors, its report in the metadata); rank 0 interleaves the shards, writes the file and
+/// prints the summary, or names the ranks that failed. Every rank returns rank 0's exit code.
+int generate_shared(const MpiWorld& world, const std::string& out, sim::DemonstrationSettings s,
+                    const ProgressCallback& progress) {
+  const char* const who = "occtrack dataset generate: ";
+  const auto start = std::chrono::steady_clock::now();
+  s.shard = world.rank();
+  s.shards = world.size();
+  MpiWorld::Result mine;
+  try {
+    sim::DemonstrationReport report;
+    io::TensorFile file = io::to_tensor_file(sim::generate_demonstrations(s, &report, progress));
+    file.metadata[kShardReportKey] = report_json(report);
+    mine.bytes = io::serialize_safetensors(file);
+  } catch (const std::exception& e) {
+    mine.ok = false;
+    mine.error = e.what();
+  }
+  std::vector<MpiWorld::Result> results = world.gather_to_root(std::move(mine));
+  if (!world.root()) return world.broadcast_from_root(kExitOk);
+
+  int code = kExitOk;
+  const std::string of = " of " + std::to_string(world.size());
+  for (std::size_t rank = 0; rank < results.size(); ++rank)
+    if (!results[rank].ok) {
+      std::cerr << who << "rank " << rank << of << ": " << results[rank].error << "\n";
+      code = kExitInputError;
+    }
+  if (code == kExitOk) {
+    try {
+      std::vector<sim::Demonstrations> parts;
+      sim::DemonstrationReport report;
+      for (std::size_t rank = 0; rank < results.size(); ++rank) {
+        io::TensorFile file = io::parse_safetensors(results[rank].bytes, "rank " + std::to_string(rank) + of);
+        results[rank].bytes = {};
+        report.add(report_from_json(file.metadata.at(kShardReportKey)));
+        file.metadata.erase(kShardReportKey);
+        parts.push_back(io::validate_dataset_file(file));
+      }
+      io::write_dataset_file(out, sim::interleave_demonstration_shards(std::move(parts)));
+      report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      print_summary(out, report);
+    } catch (const std::exception& e) {
+      std::cerr << who << e.what() << "\n";
+      code = kExitInputError;
+    }
+  }
+  return world.broadcast_from_root(code);
+}
+
+int generate(const GenerateOptions& o) {
+  const char* const who = "occtrack dataset generate: ";
+  // Under MPI, every rank checks the options alike, before any communication; rank 0 alone says what is
+  // wrong, and every rank exits with the same code.
+  const std::optional<LauncherRanks> launcher = launcher_ranks();
+  const bool speaks = !launcher || launcher->rank == 0;
+  const auto refuse = [&](const std::string& why) {
+    if (speaks) std::cerr << who << why << "\n";
+    return kExitInputError;
+  };
+  std::optional<MpiWorld> world;
+  try {
+    world.emplace();
+  } catch (const std::runtime_error& e) {
+    return refuse(e.what());
+  }
+  sim::DemonstrationSettings s;
+  s.episodes = o.episodes;
+  s.first_seed = o.seed;
+  s.worlds.clear();
+  for (const std::string& name : o.worlds) {
+    const auto world_kind = sim::parse_demonstration_world(name);
+    if (!world_kind)
+      return refuse("--worlds: unknown world kind '" + name +
+                    "' (forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, sixwall-sliding, random)");
+    s.worlds.push_back(*world_kind);
+  }
+  s.target_speeds = o.speeds;
+  const auto target = sim::parse_demonstration_target(o.target);
+  if (!target) return refuse("--target: must be smooth or teleop, got '" + o.target + "'");
+  s.target = *target;
+  if (o.episode.latency_auto())
+    return refuse("--latency: give a number of ms; auto is measured per planner in `bench` and `run` only");
+  try {
+    s.episode = o.episode.settings();
+    s.driver_options = o.episode.planner_settings(&s.episode);
+  } catch (const std::invalid_argument& e) {
+    return refuse(e.what());
+  }
+  s.duration = o.duration;
+  s.label_every = o.label_every;
+  s.driver = o.driver;
+  s.model = o.model;
+  s.jobs = o.jobs.value_or(world->default_threads());
+  s.expert = planners::ProjCemSettings::offline_expert(1);
+  s.expert.samples = o.expert_samples;
+  s.expert.cem_iterations = o.expert_iterations;
+  s.expert.settle_distance = o.expert_settle;
+  s.created_by = created_by(canonical_command(o));
+  std::string error;
+  if (!s.validate(&error)) return refuse(option_of(error) + error);
+  if (!o.model.empty() && o.driver == "expert")
+    return refuse("--model: only a learned --driver uses a model (the driver is the expert)");
+
+  const int ranks = world->size();
+  // Threads per rank: no more than rank 0's episodes, the most any rank runs.
+  const int jobs = std::min(s.jobs, (o.episodes + ranks - 1) / ranks);
+  if (!world->root()) return generate_shared(*world, o.out, s, {});  // rank 0 alone reports
+  const std::string parallel = ranks > 1 ? std::to_string(ranks) + " ranks, " + std::to_string(jobs) + " jobs each"
+                                         : std::to_string(jobs) + " jobs";
+  std::fprintf(stderr,
+               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; %s target, top speeds %s m/s), driver "
+               "%s%s, expert %d samples x %d CEM iterations, labelling 1 cycle in %d, latency %s, tau %g s, %s\n",
+               o.episodes, o.duration, static_cast<unsigned long long>(o.seed),
+               static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)), join(o.worlds).c_str(),
+               o.target.c_str(), speeds_text(o).c_str(), o.driver.c_str(),
+               o.driver != "expert" && s.driver_options.shield ? " (shield on)" : "", o.expert_samples,
+               o.expert_iterations, o.label_every, o.episode.latency.c_str(), o.episode.tau, parallel.c_str());
+  // Under MPI, rank 0's progress is that of its own episodes.
+  Progress progress(ranks > 1 ? "dataset (rank 0 of " + std::to_string(ranks) + ")" : "dataset");
+  const ProgressCallback show = [&](const sim::DemonstrationProgress& p) {
+    std::string detail = "episodes " + std::to_string(p.episodes_done) + "/" + std::to_string(p.episodes_total) +
+                         ", " + std::to_string(p.rows) + " rows, " + duration_text(p.elapsed_s);
+    if (p.fraction > 0.01 && p.fraction < 1.0)
+      detail += ", ETA " + duration_text(p.elapsed_s * (1.0 - p.fraction) / p.fraction);
+    progress.update(p.fraction, detail);
+  };
+  if (ranks > 1) return generate_shared(*world, o.out, s, show);
+
+  sim::DemonstrationReport report;
+  const sim::Demonstrations data = sim::generate_demonstrations(s, &report, show);
+  io::write_dataset_file(o.out, data);
+  print_summary(o.out, report);
   return kExitOk;
 }
 
@@ -238,8 +346,9 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
                       ") while the expert labels (DAgger with a learned planner and --model)")
       ->capture_default_str();
   gen->add_option("--model", o->model, "Model file of a learned --driver");
-  gen->add_option("--jobs", o->jobs, "Episodes run at the same time (default: every hardware thread)")
-      ->capture_default_str();
+  gen->add_option("--jobs", o->jobs,
+                  "Episodes run at the same time (default: every hardware thread; under MPI, per rank, the "
+                  "machine's hardware threads shared among its ranks, at most the CPUs the rank is bound to)");
   gen->add_option("--expert-samples", o->expert_samples, "Expert's samples per CEM iteration")->capture_default_str();
   gen->add_option("--expert-iterations", o->expert_iterations, "Expert's CEM iterations")->capture_default_str();
   gen->add_option("--expert-settle", o->expert_settle,

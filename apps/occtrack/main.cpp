@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "launcher.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"occtrack: occlusion-aware target tracking with a learned, projection-based policy"};
@@ -19,6 +20,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // Under an MPI launcher every rank parses the same command line: rank 0 alone prints help or the error.
+    if (const auto launcher = occtrack::app::launcher_ranks(); launcher && launcher->rank > 0) return e.get_exit_code();
     return app.exit(e);
   } catch (const std::exception& e) {
     std::cerr << "occtrack: error: " << e.what() << "\n";
