@@ -2,9 +2,14 @@
 // starting MPI: the one home of these variables for `dataset generate` (MPI) and `train` (c10d).
 #pragma once
 
+#include <algorithm>
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <thread>
+#ifdef __linux__
+#include <sched.h>
+#endif
 
 namespace occtrack::app {
 
@@ -46,6 +51,21 @@ inline std::optional<LauncherRanks> launcher_ranks() {
     return LauncherRanks{*rank, *size, environment_int(n.local_size).value_or(0)};
   }
   return std::nullopt;
+}
+
+/// Threads a process runs by default: every hardware thread when no launcher started it; under a launcher,
+/// the machine's hardware threads shared among its `local_size` processes, and no more than the CPUs this
+/// process is bound to (Open MPI binds each of 2 ranks to one core unless told --bind-to none; Slurm to the
+/// task's --cpus-per-task).
+inline int default_threads(bool launched, int local_size) {
+  const int hardware = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  if (!launched) return hardware;
+  int bound = hardware;
+#ifdef __linux__
+  cpu_set_t cpus;
+  if (sched_getaffinity(0, sizeof cpus, &cpus) == 0) bound = CPU_COUNT(&cpus);
+#endif
+  return std::max(1, std::min(bound, hardware / std::max(1, local_size)));
 }
 
 }  // namespace occtrack::app

@@ -9,10 +9,6 @@
 
 #include "launcher.hpp"
 
-#ifdef __linux__
-#include <sched.h>
-#endif
-
 #ifdef OCCTRACK_HAVE_MPI
 // The C API only: without these, mpi.h also declares the deprecated C++ bindings, which need a library of
 // their own.
@@ -75,16 +71,7 @@ MpiWorld::~MpiWorld() {
 #endif
 }
 
-int MpiWorld::default_threads() const {
-  const int hardware = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  if (!launched_) return hardware;
-  int bound = hardware;
-#ifdef __linux__
-  cpu_set_t cpus;
-  if (sched_getaffinity(0, sizeof cpus, &cpus) == 0) bound = CPU_COUNT(&cpus);
-#endif
-  return std::max(1, std::min(bound, hardware / local_size_));
-}
+int MpiWorld::default_threads() const { return app::default_threads(launched_, local_size_); }
 
 std::vector<MpiWorld::Result> MpiWorld::gather_to_root(Result mine) const {
   std::vector<Result> all;

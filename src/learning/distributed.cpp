@@ -101,6 +101,9 @@ void run_collective(const char* what, int rank, Call&& call) {
   } catch (const c10::Error& e) {
     throw std::runtime_error(std::string("distributed training: ") + what + " failed on rank " + std::to_string(rank) +
                              " (did another process stop?): " + e.what_without_backtrace());
+  } catch (const std::exception& e) {  // Gloo's own (a peer's connection lost)
+    throw std::runtime_error(std::string("distributed training: ") + what + " failed on rank " + std::to_string(rank) +
+                             " (did another process stop?): " + e.what());
   }
 }
 
@@ -144,34 +147,6 @@ void ProcessGroup::maximum(torch::Tensor&) {}
 void ProcessGroup::broadcast(torch::Tensor&) {}
 
 #endif
-
-namespace {
-
-/// The sum over the processes as an autograd function: forward sums the input, backward sums the gradient
-/// (the total loss is the sum of the processes' losses, and each sees the same output).
-class DifferentiableSum : public torch::autograd::Function<DifferentiableSum> {
- public:
-  static torch::Tensor forward(torch::autograd::AutogradContext* context, const torch::Tensor& x, ProcessGroup* group) {
-    context->saved_data["group"] = reinterpret_cast<std::int64_t>(group);
-    torch::Tensor y = x.detach().contiguous().clone();
-    group->sum(y);
-    return y;
-  }
-  static torch::autograd::tensor_list backward(torch::autograd::AutogradContext* context,
-                                               torch::autograd::tensor_list gradients) {
-    auto* group = reinterpret_cast<ProcessGroup*>(context->saved_data["group"].toInt());
-    torch::Tensor g = gradients[0].contiguous().clone();
-    group->sum(g);
-    return {g, torch::Tensor()};
-  }
-};
-
-}  // namespace
-
-torch::Tensor ProcessGroup::differentiable_sum(const torch::Tensor& tensor) {
-  if (size() == 1) return tensor;
-  return DifferentiableSum::apply(tensor, this);
-}
 
 bool ProcessGroup::any(bool flag) {
   torch::Tensor t = torch::full({1}, flag ? 1.0f : 0.0f);

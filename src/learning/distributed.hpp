@@ -49,9 +49,6 @@ class ProcessGroup {
 
   /// Sums `tensor` (contiguous) over the processes, in place; every process receives the same values.
   void sum(torch::Tensor& tensor);
-  /// The sum over the processes of `tensor`, as a differentiable operation: its gradient is the sum over the
-  /// processes of the gradients that reach it (what batch norm over the global batch needs).
-  torch::Tensor differentiable_sum(const torch::Tensor& tensor);
   /// The element-wise maximum over the processes, in place.
   void maximum(torch::Tensor& tensor);
   /// Rank 0's values of `tensor` on every process, in place.

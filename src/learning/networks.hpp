@@ -73,13 +73,14 @@ TORCH_MODULE(Normalization);
 // ---------------------------------------------------------------------------------------------------------
 // The networks (docs/learning.md, "Networks, in eval mode"). Inputs are already normalised.
 
-/// Sums a tensor over the processes of a data-parallel training, differentiably (the backward sums the
-/// gradients over the processes; learning/distributed.hpp). With one set, training-mode batch norm takes its
-/// statistics over the global batch, as one process would. Empty: one process.
+/// Returns the sum of a tensor over the processes of a data-parallel training (learning/distributed.hpp).
+/// With one set, training-mode batch norm takes its statistics over the global batch and its input gradient
+/// from sums over the global batch, as one process would. Empty: one process.
 using BatchSum = std::function<torch::Tensor(const torch::Tensor&)>;
 
 /// Batch norm of x [M, channels]: bn itself, or in training mode with `sum` set, the same formulas over the
-/// rows of every process (running statistics updated alike on every process).
+/// rows of every process (running statistics updated alike on every process; the weight's and bias's
+/// gradients are this process's parts, to be summed with the other parameters').
 torch::Tensor normalize_batch(torch::nn::BatchNorm1d& bn, const torch::Tensor& x, const BatchSum* sum);
 
 /// The random draws of one training pass (the latent noise and PointNet's dropout), drawn for the whole

@@ -194,7 +194,11 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data, std::shared_ptr
     for (torch::Tensor p : model_->parameters()) group_->broadcast(p);
     for (torch::Tensor b : model_->buffers()) group_->broadcast(b);
     ProcessGroup* g = group_.get();
-    model_->set_batch_sum([g](const torch::Tensor& t) { return g->differentiable_sum(t); });
+    model_->set_batch_sum([g](const torch::Tensor& t) {
+      torch::Tensor total = t.contiguous().clone();
+      g->sum(total);
+      return total;
+    });
   }
 }
 

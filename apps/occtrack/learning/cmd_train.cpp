@@ -122,12 +122,12 @@ int run(TrainOptions o) {
     return kExitInputError;
   }
   const bool reports = d.rank == 0;
-  // Threads: as asked; else, with several processes on this machine, the cores shared out among them.
-  const int local_processes = launcher && launcher->local_size > 0 ? launcher->local_size : 1;
+  // Threads: as asked; else, under a launcher, the cores shared out among its processes on this machine and
+  // no more than this one is bound to; else torch's default.
   if (o.threads > 0)
     torch::set_num_threads(o.threads);
-  else if (local_processes > 1)
-    torch::set_num_threads(std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / local_processes));
+  else if (launcher)
+    torch::set_num_threads(default_threads(true, launcher->local_size > 0 ? launcher->local_size : 1));
 
   learning::Dataset data = learning::load_dataset(o.data);
   std::shared_ptr<learning::ProcessGroup> group;
