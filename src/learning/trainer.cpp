@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <dirent.h>
+#include <dlfcn.h>
 #include <unistd.h>
 #include <fstream>
 #include <stdexcept>
@@ -410,6 +412,17 @@ void Trainer::load_checkpoint(const std::string& path) {
   optimizer_->load(optimizer_archive);
   step_ = step.toInt();
   elapsed_seconds_ = elapsed.toDouble();
+}
+
+int set_training_threads(int threads, bool shared) {
+  if (threads > 0) torch::set_num_threads(threads);
+  const int torch_threads = torch::get_num_threads();
+  if ((torch_threads > 1 || shared) && std::getenv("OPENBLAS_NUM_THREADS") == nullptr) {
+    // Looked up at run time: present only when the BLAS that LibTorch loaded is OpenBLAS.
+    using SetThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+  }
+  return torch_threads;
 }
 
 ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std::string& created_by) const {

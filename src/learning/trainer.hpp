@@ -182,6 +182,13 @@ class Trainer {
   std::shared_ptr<ProcessGroup> group_;
 };
 
+/// Sets torch's intra-op threads (threads <= 0: keeps torch's default) and, when torch runs more than one or
+/// `shared` (other training processes may share the machine), limits the BLAS library's own thread pool to
+/// one thread, unless OPENBLAS_NUM_THREADS says otherwise:
+/// OpenBLAS's pthread build otherwise starts its threads under every torch thread, and on 2 cores a training
+/// step with 2 torch threads took twice as long (docs/scaling.md, "Measured"). Returns torch's threads.
+int set_training_threads(int threads, bool shared = false);
+
 /// "AMD EPYC 7B13 (1 thread)" from /proc/cpuinfo, or the CUDA device's name ("NVIDIA H100 80GB HBM3").
 std::string hardware_description(torch::Device device);
 

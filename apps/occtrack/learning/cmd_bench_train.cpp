@@ -77,7 +77,7 @@ StepTiming time_steps(const learning::Dataset& data, const learning::Batch& batc
 
 int run(const BenchTrainOptions& o) {
   keep_large_allocations();
-  if (o.threads > 0) torch::set_num_threads(o.threads);
+  learning::set_training_threads(o.threads);
   torch::Device device(o.device);
   if (device.is_cuda() && !torch::cuda::is_available()) {
     std::cerr << "occtrack bench train-step: --device " << o.device << ": CUDA is not available\n";

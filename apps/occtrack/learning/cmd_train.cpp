@@ -124,10 +124,10 @@ int run(TrainOptions o) {
   const bool reports = d.rank == 0;
   // Threads: as asked; else, under a launcher, the cores shared out among its processes on this machine and
   // no more than this one is bound to; else torch's default.
-  if (o.threads > 0)
-    torch::set_num_threads(o.threads);
-  else if (launcher)
-    torch::set_num_threads(default_threads(true, launcher->local_size > 0 ? launcher->local_size : 1));
+  learning::set_training_threads(o.threads > 0 ? o.threads
+                                 : launcher     ? default_threads(true, launcher->local_size > 0 ? launcher->local_size : 1)
+                                                : 0,
+                                 /*shared=*/d.world_size > 1);
 
   learning::Dataset data = learning::load_dataset(o.data);
   std::shared_ptr<learning::ProcessGroup> group;
