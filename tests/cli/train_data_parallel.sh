@@ -4,7 +4,8 @@
 #      127.0.0.1:PORT: every step's loss terms, the validation losses every 5 steps and the final model agree
 #      to float rounding; only rank 0 writes;
 #   2. with mpirun (when given): the same, rank and size taken from the launcher;
-#   3. two processes given different settings refuse, naming the difference, without a hang.
+#   3. --world-size without --rank or --rendezvous is refused at once; two processes given different settings
+#      refuse, naming the difference, without a hang.
 # usage: train_data_parallel.sh OCCTRACK WORKDIR [MPIEXEC]
 set -euo pipefail
 occtrack=$1 work=$2 mpiexec=${3:-}
@@ -55,6 +56,12 @@ if [ -n "$mpiexec" ]; then
   grep -q "2 processes" mpi.log
   check mpi
 fi
+
+echo "== incomplete options refused before any waiting"
+if "${train[@]}" --out x.safetensors --world-size 2 --rendezvous "$work/unused" > norank.log 2>&1; then exit 1; fi
+grep -q -- "--rank" norank.log
+if "${train[@]}" --out x.safetensors --world-size 2 --rank 0 > nowhere.log 2>&1; then exit 1; fi
+grep -q "rendezvous" nowhere.log
 
 echo "== different settings refused"
 set +e

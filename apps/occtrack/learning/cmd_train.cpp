@@ -110,7 +110,12 @@ int run(TrainOptions o) {
   const std::optional<LauncherRanks> launcher = launcher_ranks();
   learning::DistributedSettings& d = o.distributed;
   d.world_size = o.world_size > 0 ? o.world_size : launcher ? launcher->size : 1;
-  d.rank = o.rank >= 0 ? o.rank : launcher && o.world_size == 0 ? launcher->rank : 0;
+  d.rank = o.rank >= 0 ? o.rank : launcher ? launcher->rank : 0;
+  if (d.world_size > 1 && o.rank < 0 && !launcher) {
+    std::cerr << who << "--rank: give each process its rank with --world-size " << d.world_size
+              << " (or start them with mpirun, which numbers them)\n";
+    return kExitInputError;
+  }
   std::string error;
   if (!d.validate(&error)) {
     std::cerr << who << error << " (--world-size, --rank, --rendezvous)\n";
