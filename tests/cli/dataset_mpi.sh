@@ -17,8 +17,8 @@ mpiexec=$1
 occtrack=$(realpath -- "$2")  # absolute: the failure check starts ranks in other folders
 model=$(realpath -- "$3")
 
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/occtrack_mpi.XXXXXX") || { echo "error: mktemp failed" >&2; exit 2; }
-trap 'rm -rf -- "$tmp"' EXIT
+# shellcheck source=harness.sh
+source "$(dirname "$0")/harness.sh" occtrack_mpi
 
 # As root in containers, and more ranks than cores: Open MPI refuses both unless told (other MPIs ignore the
 # variables).
@@ -26,13 +26,11 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 launch=("$mpiexec")
 if "$mpiexec" --version 2>&1 | grep -Eq "Open MPI|OpenRTE"; then launch+=(--oversubscribe); fi
 
-passed=0
-failed=0
-pass() { passed=$((passed + 1)); echo "ok   - $1"; }
-fail() {
-  failed=$((failed + 1))
-  echo "FAIL - $1"
-  tail -n 8 -- "$tmp/out" "$tmp/err" 2>/dev/null | cut -c1-300 | sed 's/^/       /'
+# A failed check shows the end of the command's output.
+fail_showing_output() {
+  local lines
+  mapfile -t lines < <(tail -n 8 -- "$tmp/out" "$tmp/err" 2>/dev/null | cut -c1-300)
+  fail "$1" "${lines[@]}"
 }
 
 # Runs a command with a time limit (a hang fails the check); leaves the exit status in $rc and the output in
@@ -52,7 +50,7 @@ one_rows=$(rows_line)
 if [ "$rc" -eq 0 ] && [ -s "$tmp/one.safetensors" ] && [ -n "$one_rows" ]; then
   pass "one process writes the file ($one_rows)"
 else
-  fail "one process writes the file (exit $rc)"
+  fail_showing_output "one process writes the file (exit $rc)"
 fi
 
 for ranks in 2 3 5; do
@@ -62,7 +60,7 @@ for ranks in 2 3 5; do
      grep -q "$ranks ranks, 1 jobs each" "$tmp/err"; then
     pass "$ranks ranks write the same bytes and the same summary"
   else
-    fail "$ranks ranks write the same bytes and the same summary (exit $rc)"
+    fail_showing_output "$ranks ranks write the same bytes and the same summary (exit $rc)"
   fi
 done
 
@@ -77,7 +75,7 @@ if [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] && grep -q "rank 1 of 2: planner cvae: n
    [ ! -e "$tmp/with-model/out.safetensors" ] && [ ! -e "$tmp/without-model/out.safetensors" ]; then
   pass "a rank that fails is named, no file is written, the run exits non-zero"
 else
-  fail "a rank that fails is named, no file is written, the run exits non-zero (exit $rc; 124: timed out)"
+  fail_showing_output "a rank that fails is named, no file is written, the run exits non-zero (exit $rc; 124: timed out)"
 fi
 
 # A refused option: every rank finds it before any communication, rank 0 alone says so.
@@ -85,8 +83,7 @@ run "${launch[@]}" -n 3 "$occtrack" "${small[@]}" --seed 1500 --out "$tmp/unused
 if [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] && [ "$(grep -c "meet the benchmark's seeds 1000-1999" "$tmp/err")" -eq 1 ]; then
   pass "a refused option is reported once and the run exits non-zero"
 else
-  fail "a refused option is reported once and the run exits non-zero (exit $rc; 124: timed out)"
+  fail_showing_output "a refused option is reported once and the run exits non-zero (exit $rc; 124: timed out)"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

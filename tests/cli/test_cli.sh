@@ -29,19 +29,8 @@ if ! command -v python3 >/dev/null 2>&1; then
   exit 2
 fi
 
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/occtrack_cli.XXXXXX") || { echo "error: mktemp failed" >&2; exit 2; }
-trap 'rm -rf -- "$tmp"' EXIT
-
-passed=0
-failed=0
-pass() { passed=$((passed + 1)); echo "ok   - $1"; }
-fail() {
-  failed=$((failed + 1))
-  echo "FAIL - $1"
-  shift
-  local detail
-  for detail in "$@"; do printf '       %s\n' "$detail"; done
-}
+# shellcheck source=harness.sh
+source "$(dirname "$0")/harness.sh" occtrack_cli
 
 # Runs the tool with a time limit; leaves the exit status in $rc, the output in $tmp/out and $tmp/err.
 run_tool() {
@@ -330,5 +319,4 @@ else
   fail "run --no-shield runs the planner alone" "$(tail_of "$tmp/err")"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

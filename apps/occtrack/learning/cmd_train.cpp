@@ -17,7 +17,6 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
-#include <thread>
 
 #include "../cli_support.hpp"
 #include "../commands.hpp"
