@@ -14,6 +14,7 @@
 #include "occtrack/io/results.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/follower.hpp"
+#include "occtrack/planners/safety.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/world.hpp"
 
@@ -99,6 +100,9 @@ TEST(HtmlReplay, RecordingCyclesChangesNothingElse) {
   EXPECT_EQ(c.scan.ranges.size(), 720u);
   EXPECT_EQ(c.plan.size(), 50u);
   EXPECT_EQ(c.candidates.size(), core::CycleRecord::kMaxCandidates);
+  EXPECT_STREQ(c.safety, "");  // no safety layer
+  const Vec2 to_target = sim::World(scenario).target_position(c.time) - c.robot;
+  EXPECT_NEAR(c.command.norm(), to_target.norm() > 2.0 ? 1.0 : 0.0, 1e-12);  // the Fan's command, as sent
 }
 
 TEST(HtmlReplay, PageIsSelfContainedAndHoldsEveryFrame) {
@@ -131,6 +135,8 @@ TEST(HtmlReplay, PageIsSelfContainedAndHoldsEveryFrame) {
   EXPECT_EQ(cycle["plan"].size(), 2u * 12);
   EXPECT_EQ(cycle["candidates"].size(), 10u);
   EXPECT_EQ(cycle["candidates"][0].size(), 2u * 12);
+  EXPECT_EQ(cycle["command"][0].get<int>(), static_cast<int>(std::lround(r.trace.cycles[5].command.x() * 100)));
+  EXPECT_FALSE(cycle.contains("safety"));  // written only with the safety layer
   // A beam's return lands where the cycle's robot and the scan say.
   const core::CycleRecord& c = r.trace.cycles[5];
   for (std::size_t b = 0; b < cycle["ranges"].size(); ++b) {
@@ -151,6 +157,27 @@ TEST(HtmlReplay, PageIsSelfContainedAndHoldsEveryFrame) {
     EXPECT_EQ(data["moving_xy"][2 * i + 1].get<int>(), static_cast<int>(std::lround(centre.y() * 100)));
   }
   EXPECT_NE(data["moving_xy"][0], data["moving_xy"][2 * (r.trace.time.size() - 1)]);  // it did move
+}
+
+TEST(HtmlReplay, EachCycleSaysWhatTheSafetyLayerDid) {
+  const core::Scenario scenario = example(4.0);
+  std::unique_ptr<planners::Planner> shielded = planners::safety::make_shielded(std::make_unique<Fan>(), {});
+  sim::EpisodeSettings settings;
+  settings.record_cycles = true;
+  const sim::EpisodeResult r = sim::run_episode(scenario, *shielded, settings);
+  const json data = page_data(io::episode_html(scenario, r.trace, r.metrics));
+  ASSERT_EQ(data["cycles"].size(), r.trace.cycles.size());
+  int plan = 0;
+  for (std::size_t k = 0; k < r.trace.cycles.size(); ++k) {
+    const std::string said = data["cycles"][k]["safety"].get<std::string>();
+    EXPECT_EQ(said, r.trace.cycles[k].safety);
+    bool known = false;
+    for (int a = 1; a < planners::kSafetyActions; ++a)
+      known = known || said == planners::to_string(static_cast<planners::SafetyAction>(a));
+    EXPECT_TRUE(known) << said;
+    plan += said == "plan";
+  }
+  EXPECT_EQ(plan, r.metrics.shield.plan);  // the same counts as the metrics
 }
 
 TEST(HtmlReplay, WithoutCyclesTheFramesStillPlay) {

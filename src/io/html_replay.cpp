@@ -142,7 +142,9 @@ void write_cycle(JsonOut& j, const core::CycleRecord& c, const HtmlReplayOptions
     if (k > 0) j.raw(',');
     j.points(thin(c.candidates[k], options.max_path_points));
   }
-  j.raw("]}");
+  j.raw("],").key("command").points({c.command});
+  if (*c.safety != '\0') j.raw(',').key("safety").string(c.safety);
+  j.raw('}');
 }
 
 /// The JSON text fit to sit inside a <script> element: '<' only occurs in strings, where \u003c means the
@@ -383,7 +385,11 @@ function draw(i) {
     ctx.fillStyle = C.robot; ctx.strokeStyle = C.robotEdge; ctx.lineWidth = 1; ctx.fill(); ctx.stroke();
   }
   slider.value = frame;
-  timeLabel.textContent = 't = ' + (F.t[frame] / 1000).toFixed(2) + ' s' + (occluded ? '  (occluded)' : '');
+  // The cycle's command (cm/s) and, with the safety layer, what it did (docs/safety.md, "Fallback").
+  const command = c && ok(c.command[0]) && ok(c.command[1])
+      ? '  command ' + (Math.hypot(c.command[0], c.command[1]) / 100).toFixed(2) + ' m/s' : '';
+  const safety = c && c.safety ? '  safety layer: ' + c.safety : '';
+  timeLabel.textContent = 't = ' + (F.t[frame] / 1000).toFixed(2) + ' s' + (occluded ? '  (occluded)' : '') + command + safety;
 }
 
 // Metrics: io::episode_json's object, nested keys flattened ("compute_ms.median"), the headline ones first.

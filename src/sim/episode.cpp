@@ -199,7 +199,8 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
         const auto first = out.candidates.begin();
         const auto kept =
             static_cast<std::ptrdiff_t>(std::min(out.candidates.size(), core::CycleRecord::kMaxCandidates));
-        result.trace.cycles.push_back({t, position, scan, out.plan, {first, first + kept}});
+        const char* safety = out.safety == planners::SafetyAction::off ? "" : planners::to_string(out.safety);
+        result.trace.cycles.push_back({t, position, scan, out.plan, {first, first + kept}, next, safety});
       }
       if (snapshot_every > 0 && step >= next_snapshot &&
           static_cast<int>(result.trace.snapshots.size()) < settings.snapshots) {

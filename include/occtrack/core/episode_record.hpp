@@ -78,6 +78,10 @@ struct CycleRecord {
   Scan scan;  ///< as the planner received it (world frame, from `robot`)
   std::vector<Vec2> plan;
   std::vector<std::vector<Vec2>> candidates;  ///< at most kMaxCandidates
+  Vec2 command = Vec2::Zero();  ///< the velocity command sent (world frame; zero when the planner failed)
+  /// What the safety layer did, as planners::to_string(SafetyAction) spells it ("plan", "evasive", ...; a
+  /// string literal); empty without the layer.
+  const char* safety = "";
 };
 
 /// What happened, for figures: every trace_stride-th physics step.
