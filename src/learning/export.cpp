@@ -14,15 +14,18 @@ nlohmann::json loss_json(const LossTerms& l) {
 
 std::string training_json(const TrainingRecord& r) {
   nlohmann::json datasets = nlohmann::json::array();
-  int64_t rows = 0;
+  int64_t rows = 0, dagger_rounds = 0;
   for (const auto& f : r.datasets) {
-    datasets.push_back({{"path", f.path}, {"rows", f.rows}});
+    datasets.push_back({{"path", f.path}, {"rows", f.rows}, {"episodes", f.episodes}, {"driver", f.driver}});
     rows += f.rows;
+    // A round of DAgger is a dataset a learned policy drove while the expert labelled (docs/learning.md).
+    if (!f.driver.empty() && f.driver != "expert") ++dagger_rounds;
   }
   nlohmann::json losses = {{"train", loss_json(r.final_loss)}};
   if (r.validation) losses["validation"] = loss_json(*r.validation);
   const nlohmann::json j = {{"datasets", datasets},
                             {"rows", rows},
+                            {"dagger_rounds", dagger_rounds},
                             {"train_rows", r.train_rows},
                             {"validation_rows", r.validation_rows},
                             {"seed", r.seed},

@@ -23,6 +23,8 @@ struct TrainingRecord {
   struct File {
     std::string path;
     int64_t rows = 0;
+    int64_t episodes = 0;
+    std::string driver;  ///< the dataset's `driver` metadata: "expert", or the model file that drove (DAgger)
   };
   std::vector<File> datasets;
   int64_t train_rows = 0, validation_rows = 0;

@@ -435,7 +435,10 @@ ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std:
   m.band = settings_.band;
   m.created_by = created_by;
   TrainingRecord& t = m.training;
-  for (const auto& f : data_.files) t.datasets.push_back({f.path, f.rows});
+  for (const auto& f : data_.files) {
+    const auto driver = f.metadata.find("driver");
+    t.datasets.push_back({f.path, f.rows, f.episodes, driver == f.metadata.end() ? "" : driver->second});
+  }
   t.train_rows = split_.train.numel();
   t.validation_rows = split_.validation.numel();
   t.seed = settings_.seed;

@@ -224,12 +224,15 @@ TEST_F(Training, ResumedRunRepeatsTheLosses) {
 }
 
 TEST_F(Training, ExportWritesEveryTensorOfTheContract) {
-  const std::string data = path("data.safetensors");
+  const std::string data = path("data.safetensors"), dagger = path("dagger.safetensors");
   io::write_safetensors(data, dataset_file(32));
+  io::TensorFile driven = dataset_file(16, 32, 8, 4);  // a DAgger round: a learned policy drove
+  driven.metadata["driver"] = "round0/cvae.safetensors";
+  io::write_safetensors(dagger, driven);
   learning::TrainingSettings s = small_settings();
   s.steps = 2;
   s.variant = io::Variant::fixed_q;
-  learning::Trainer trainer(s, learning::load_dataset({data}));
+  learning::Trainer trainer(s, learning::load_dataset({data, dagger}));
   const learning::TrainingSummary summary = trainer.run();
   const std::string out = path("model.safetensors");
   learning::export_model(out, *trainer.model(), trainer.model_metadata(summary, "test_training"));
@@ -300,6 +303,12 @@ TEST_F(Training, ExportWritesEveryTensorOfTheContract) {
     EXPECT_TRUE(training.contains(key)) << key;
   EXPECT_EQ(training.at("datasets").at(0).at("path"), data);
   EXPECT_EQ(training.at("datasets").at(0).at("rows"), 32);
+  EXPECT_EQ(training.at("datasets").at(0).at("driver"), "");
+  EXPECT_EQ(training.at("datasets").at(1).at("rows"), 16);
+  EXPECT_EQ(training.at("datasets").at(1).at("driver"), "round0/cvae.safetensors");
+  EXPECT_GT(training.at("datasets").at(1).at("episodes"), 0);
+  EXPECT_EQ(training.at("rows"), 48);
+  EXPECT_EQ(training.at("dagger_rounds"), 1);
   EXPECT_EQ(training.at("steps"), 2);
   EXPECT_EQ(training.at("device"), "cpu");
   EXPECT_FALSE(training.at("hardware").get<std::string>().empty());
