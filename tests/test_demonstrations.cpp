@@ -237,6 +237,26 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   std::filesystem::remove(path);
 }
 
+TEST(Demonstrations, OnlyALearnedDriverMakesADaggerRound) {
+  // The `driver` metadata as demonstration_metadata writes it: the expert, a planner's name, or the model file
+  // of a learned driver given one.
+  const auto with = [](const std::string& driver) { return std::map<std::string, std::string>{{"driver", driver}}; };
+  EXPECT_FALSE(sim::learned_driver(with("expert")));
+  EXPECT_FALSE(sim::learned_driver(with("projcem")));
+  EXPECT_FALSE(sim::learned_driver(with("follower")));
+  EXPECT_TRUE(sim::learned_driver(with("cvae")));
+  EXPECT_TRUE(sim::learned_driver(with("cvae-fixed-q")));
+  EXPECT_TRUE(sim::learned_driver(with("build-data/dagger/cvae-r0.safetensors")));
+  EXPECT_FALSE(sim::learned_driver({}));
+  sim::DemonstrationSettings s;
+  s.driver = "cvae";
+  s.model = "round0/cvae.safetensors";
+  EXPECT_TRUE(sim::learned_driver(sim::demonstration_metadata(s)));
+  s.driver = "expert";
+  s.model.clear();
+  EXPECT_FALSE(sim::learned_driver(sim::demonstration_metadata(s)));
+}
+
 TEST(Demonstrations, SameSeedGivesIdenticalBytesWhateverTheJobs) {
   sim::DemonstrationSettings settings = tiny();
   settings.duration = 1.5;

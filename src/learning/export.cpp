@@ -18,8 +18,7 @@ std::string training_json(const TrainingRecord& r) {
   for (const auto& f : r.datasets) {
     datasets.push_back({{"path", f.path}, {"rows", f.rows}, {"episodes", f.episodes}, {"driver", f.driver}});
     rows += f.rows;
-    // A round of DAgger is a dataset a learned policy drove while the expert labelled (docs/learning.md).
-    if (!f.driver.empty() && f.driver != "expert") ++dagger_rounds;
+    if (f.learned_driver) ++dagger_rounds;
   }
   nlohmann::json losses = {{"train", loss_json(r.final_loss)}};
   if (r.validation) losses["validation"] = loss_json(*r.validation);

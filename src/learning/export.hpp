@@ -24,7 +24,8 @@ struct TrainingRecord {
     std::string path;
     int64_t rows = 0;
     int64_t episodes = 0;
-    std::string driver;  ///< the dataset's `driver` metadata: "expert", or the model file that drove (DAgger)
+    std::string driver;  ///< the dataset's `driver` metadata: "expert", a planner, or the model file that drove
+    bool learned_driver = false;  ///< a learned policy drove (a DAgger round; sim::learned_driver)
   };
   std::vector<File> datasets;
   int64_t train_rows = 0, validation_rows = 0;

@@ -15,6 +15,7 @@
 
 #include "learning/export.hpp"
 #include "occtrack/io/projection_case.hpp"
+#include "occtrack/sim/demonstrations.hpp"
 
 namespace occtrack::learning {
 
@@ -437,7 +438,8 @@ ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std:
   TrainingRecord& t = m.training;
   for (const auto& f : data_.files) {
     const auto driver = f.metadata.find("driver");
-    t.datasets.push_back({f.path, f.rows, f.episodes, driver == f.metadata.end() ? "" : driver->second});
+    t.datasets.push_back({f.path, f.rows, f.episodes, driver == f.metadata.end() ? "" : driver->second,
+                          sim::learned_driver(f.metadata)});
   }
   t.train_rows = split_.train.numel();
   t.validation_rows = split_.validation.numel();

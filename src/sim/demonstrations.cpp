@@ -17,6 +17,7 @@
 #include "occtrack/io/error.hpp"
 #include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
+#include "occtrack/planners/learned.hpp"
 #include "occtrack/sim/paper_worlds.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
@@ -198,6 +199,16 @@ std::string driver_text(const DemonstrationSettings& s) {
 }
 
 }  // namespace
+
+bool learned_driver(const std::map<std::string, std::string>& metadata) {
+  const auto it = metadata.find("driver");
+  if (it == metadata.end() || it->second == "expert") return false;
+  for (const policy::Variant v : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q})
+    if (it->second == planners::learned_planner_name(v)) return true;
+  const std::vector<std::string> planners = planners::planner_names();
+  // Any other planner's name drove without learning; what is left is a model file (driver_text).
+  return std::find(planners.begin(), planners.end(), it->second) == planners.end();
+}
 
 std::map<std::string, std::string> demonstration_metadata(const DemonstrationSettings& s) {
   json kinds = json::array();

@@ -213,4 +213,9 @@ class DemonstrationRecorder final : public planners::Planner {
 /// The metadata of a dataset made with these settings (rows left to the writer).
 std::map<std::string, std::string> demonstration_metadata(const DemonstrationSettings& settings);
 
+/// Whether a dataset's rows were driven by a learned policy while the expert labelled (a DAgger round), read
+/// from the `driver` its metadata holds: "expert" or a non-learned planner's name (projcem, follower, ...) is
+/// not; a learned planner's name (cvae, bc, cvae-fixed-q) or a model file is. False without the key.
+bool learned_driver(const std::map<std::string, std::string>& metadata);
+
 }  // namespace occtrack::sim
