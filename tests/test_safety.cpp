@@ -342,6 +342,32 @@ TEST(Certifier, ASmallerClearanceForTheLastResort) {
   EXPECT_TRUE(c.check(Vec2::Zero(), c.hold(), true, 0.5).certified);
 }
 
+TEST(Certifier, TheBestEffortWeighsWhatAMovingPointMayDoNext) {
+  // A lane along y = -1: an object 1 m to the right in it recedes at 1 m/s. Leaving the lane (up) and crossing
+  // it behind the object (down) keep about as far from its constant-velocity prediction; but should it reverse
+  // or turn, crossing meets it. With `futures` the best effort's measure says so.
+  const core::Scan open = make_scan([](double) { return kInf; });
+  std::vector<MovingPoint> receding;
+  for (int i = 0; i < 5; ++i) receding.push_back({Vec2(1.0 + 0.1 * i, -1.0), Vec2(1.0, 0.0)});
+  Certifier c(certifier_settings(0.25));
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), receding, 1.0);
+  const Vec2 up(0.0, 2.0), down(0.0, -2.0);
+  const double predicted_up = c.check(up, 0.5, true).min_distance;
+  const double predicted_down = c.check(down, 0.5, true).min_distance;
+  const double futures_up = c.check(up, 0.5, true, c.clearance(), -INFINITY, true).min_distance;
+  const double futures_down = c.check(down, 0.5, true, c.clearance(), -INFINITY, true).min_distance;
+  // (Measured: 1.43 and 1.43 m by the prediction; 1.00 and 0.45 m by the futures.)
+  EXPECT_GT(predicted_down, 1.0);                   // the prediction alone: crossing is no danger
+  EXPECT_GT(predicted_down, predicted_up - 0.1);    // and no worse than leaving
+  EXPECT_LT(futures_down, predicted_down - 0.5);    // if it reverses or turns, crossing comes near it
+  EXPECT_GT(futures_up, futures_down + 0.5);        // leaving is clearly better
+  EXPECT_LE(futures_up, predicted_up);              // the worst future is never farther than the prediction
+  EXPECT_LE(futures_down, predicted_down);
+  // The verdict of a point at rest (no velocity, no futures) is the same either way.
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.0, 0.0), Vec2::Zero()}}, 0.0);
+  EXPECT_EQ(c.check(up, 0.5, true).min_distance, c.check(up, 0.5, true, c.clearance(), -INFINITY, true).min_distance);
+}
+
 TEST(Certifier, RejectsBadSettings) {
   planners::safety::Settings s;
   s.margin = -0.1;
@@ -669,6 +695,31 @@ TEST(MotionEvidence, WhatWasOutOfSightOrTooRecentIsUnknown) {
   evidence.reset();
   evidence.add(scan, Vec2::Zero(), 0.7);
   EXPECT_EQ(evidence.judge(cube.data(), cube.size()), MotionEvidence::Verdict::unknown);
+}
+
+TEST(MotionEvidence, SeenBeforeOnlyWhereAnEarlierScanSawTheSurface) {
+  // A box in view all along, from a moving robot, lies on surfaces seen 0.25 s before; one that was hidden
+  // behind a nearer wall until the last scan does not (it may be an object just come into view, whose track has
+  // no velocity yet: the safety layer treats its points as possibly moving).
+  const auto robot = [](double t) { return Vec2(1.0 * t, 0.0); };
+  MotionEvidence evidence;
+  const auto world = [](double t) {
+    std::vector<core::ObstacleSpec> o{box(Vec2(3.5, 0.0), Vec2(0.4, 0.4)), box(Vec2(2.0, 2.0), Vec2(0.6, 0.6))};
+    if (t < 0.69) o.push_back(box(Vec2(1.6, 0.0), Vec2(0.2, 1.2)));
+    return o;
+  };
+  const core::Scan scan = feed(evidence, world, robot);
+  const auto hidden = object_points(scan, robot(0.7), Vec2(3.5, 0.0), Vec2(0.4, 0.4));
+  const auto in_view = object_points(scan, robot(0.7), Vec2(2.0, 2.0), Vec2(0.6, 0.6));
+  ASSERT_GT(hidden.size(), 3u);
+  ASSERT_GT(in_view.size(), 5u);
+  for (const MovingPoint& p : hidden) EXPECT_FALSE(evidence.seen_before(p.position)) << p.position.transpose();
+  for (const MovingPoint& p : in_view) EXPECT_TRUE(evidence.seen_before(p.position)) << p.position.transpose();
+  // Without a scan 0.25 s old nothing was seen before; nor is a non-finite point.
+  MotionEvidence fresh;
+  fresh.add(scan, robot(0.7), 0.7);
+  EXPECT_FALSE(fresh.seen_before(in_view.front().position));
+  EXPECT_FALSE(evidence.seen_before(Vec2(std::nan(""), 0.0)));
 }
 
 }  // namespace

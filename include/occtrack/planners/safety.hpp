@@ -148,9 +148,15 @@ class Certifier {
   ///
   /// `give_up_at`: once min_distance falls to this or below, the manoeuvre is dropped (neither certified nor in
   /// free space): the best effort's search, where a manoeuvre that comes that near cannot beat the best so far.
+  ///
+  /// `futures`: min_distance (and the verdict) take, for each moving point, the worst of five futures from scan
+  /// time: it keeps its velocity, stops, reverses, or turns 90 degrees either way at its speed. The best effort
+  /// weighs manoeuvres so: against the constant-velocity prediction alone, crossing the lane of an obstacle
+  /// that is receding looks as good as leaving it, until the obstacle reverses (docs/safety.md, "The best
+  /// effort beside a moving obstacle").
   Verdict check(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance,
-                double give_up_at = -INFINITY) const {
-    return follow(command, hold_time, to_the_end, clearance, true, give_up_at);
+                double give_up_at = -INFINITY, bool futures = false) const {
+    return follow(command, hold_time, to_the_end, clearance, true, give_up_at, futures);
   }
   /// The clearance this cycle certifies with (see the class comment).
   double clearance() const { return clearance_; }
@@ -162,7 +168,7 @@ class Certifier {
   /// check()'s simulation. Without `distances`, min_distance is only kept for the points that come within the
   /// clearance (the verdict is the same; objects whose bounding circle stays clear are not looked into).
   Verdict follow(const Eigen::Vector2d& command, double hold_time, bool to_the_end, double clearance, bool distances,
-                 double give_up_at) const;
+                 double give_up_at, bool futures = false) const;
 
   Settings settings_;
   FreeSpace free_;
@@ -213,6 +219,11 @@ class MotionEvidence {
   void add(const core::Scan& scan, const Eigen::Vector2d& robot, double time);
   /// The verdict on an object given by its points (robot-centric, in the scan of the last add()).
   Verdict judge(const MovingPoint* points, std::size_t count) const;
+  /// True when `point` (robot-centric, in the scan of the last add()) lies on a surface the scan of
+  /// baselines[0] ago saw (within the tolerance). False when that scan could not see it there (hidden behind a
+  /// return, beyond range, free space then) or there is no scan that old: the point may belong to an object
+  /// that has just come into view, whose track has no velocity yet.
+  bool seen_before(const Eigen::Vector2d& point) const;
 
  private:
   struct Frame {

@@ -135,7 +135,7 @@ double passive_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& ahead, 
 }  // namespace
 
 Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold_time, bool to_the_end,
-                                     double clearance, bool distances, double give_up_at) const {
+                                     double clearance, bool distances, double give_up_at, bool futures) const {
   Verdict verdict;
   const double keep = std::min(clearance, clearance_);  // the clearance kept: never more than this cycle's
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
@@ -154,7 +154,18 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
   // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
   // the clearance (now or earlier); with `stop_early`, the groups after that one are not looked at.
-  const auto near_moving = [&](auto&& distance, bool stop_early) {
+  const auto near_moving = [&](auto&& predicted, bool stop_early) {
+    // With `futures`, the worst of five: the velocity kept, zero, reversed, turned 90 degrees either way. Each is
+    // the distance to a translated shape, so a group's bounding circle still bounds it from below.
+    const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
+      double d = predicted(q, w);
+      if (futures && !w.isZero()) {
+        const Eigen::Vector2d turned(-w.y(), w.x());
+        d = std::min({d, predicted(q, Eigen::Vector2d::Zero()), predicted(q, -w), predicted(q, turned),
+                      predicted(q, -turned)});
+      }
+      return d;
+    };
     for (const Group* group : near_groups_) {
       const Group& g = *group;
       const double bound = distance(g.center, g.velocity) - g.radius;

@@ -160,4 +160,10 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
   return still ? Verdict::still : Verdict::unknown;
 }
 
+bool MotionEvidence::seen_before(const Eigen::Vector2d& point) const {
+  if (!std::isfinite(current_.time) || !point.allFinite()) return false;
+  const Frame* earlier = older_than(options_.baselines[0]);
+  return earlier != nullptr && on_surface(*earlier, current_.robot + point);
+}
+
 }  // namespace occtrack::planners::safety

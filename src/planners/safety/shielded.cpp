@@ -114,8 +114,13 @@ class Shielded final : public Planner {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
         // Reported still, but where something moved within the last 0.5 s: an obstacle reversing passes
-        // through zero speed, and its estimate lags. Moving with unknown heading (Certifier: a full disk).
-        if (moved_lately(input.robot_position + position, input.time, fresh))
+        // through zero speed, and its estimate lags. Or on no surface the scan of 0.25 s ago saw: an object just
+        // come into view has no velocity track yet, and may be moving (Proj-CEM at compute scale 10,
+        // clutter-dynamic-2ms, dynamic-a-3: a cylinder coming out from behind a box counted as still;
+        // docs/safety.md). Either way moving with unknown heading (Certifier: a full disk at the fastest speed
+        // seen this episode; none until something has been seen moving).
+        if (moved_lately(input.robot_position + position, input.time, fresh) ||
+            (certifier_.settings().motion_evidence && fastest_moving_ > 0.0 && !evidence_.seen_before(position)))
           moving_.push_back({position, Eigen::Vector2d::Zero()});
       }
     }
@@ -133,7 +138,7 @@ class Shielded final : public Planner {
     }
     // 2. A certified stop or evasive manoeuvre, whichever is nearer the planner's wish (the stop when equally
     //    near); else the evasive manoeuvre under way, if still certified; else the best effort: the manoeuvre
-    //    that stays in known-free space and keeps farthest from the moving points' predictions.
+    //    that stays in known-free space and keeps farthest from the moving points' futures.
     const Settings& s = certifier_.settings();
     const Eigen::Vector2d wish = out.ok && planned.allFinite() ? planned : Eigen::Vector2d::Zero();
     const double interval = certifier_.hold();
@@ -170,14 +175,14 @@ class Shielded final : public Planner {
     // rather than brake blind (Proj-CEM at compute scale 10, clutter-dynamic-2ms, dynamic-a-7: a full brake
     // where thousands of manoeuvres were clear; docs/safety.md).
     for (const double clearance : {certifier_.clearance(), std::min(certifier_.clearance(), s.robot_radius)}) {
-      Choice effort;  // farthest from the moving points' predictions, then nearest the wish
-      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance);
+      Choice effort;  // farthest from the moving points' futures (Certifier::check), then nearest the wish
+      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance, -INFINITY, true);
       if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
       for (const Candidate& c : candidates_) {
         // A manoeuvre that comes as near as effort.below(gap) cannot be chosen: its check stops there.
         const double give_up_at = effort.below(c.gap);
         if (give_up_at == INFINITY) continue;  // the best so far is clear of every moving point and nearer the wish
-        const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance, give_up_at);
+        const Certifier::Verdict verdict = certifier_.check(c.command, c.hold, true, clearance, give_up_at, true);
         if (verdict.in_free_space) effort.offer(c.command, verdict.min_distance, c.gap, c.hold);
       }
       if (effort.found) return send(out, effort.command, SafetyAction::best_effort);
