@@ -251,6 +251,34 @@ TEST(Certifier, MovingPointsMayTurnOrReverseWhileTheRobotMoves) {
   EXPECT_TRUE(may_turn.certify(Vec2(0.5, 0.0)));
 }
 
+TEST(Certifier, TheSharpestTurnOfPassiveSafetyIsASetting) {
+  // A point heading up (+y) at 1 m/s, 0.45 m to the robot's left and 0.4 m ahead of the robot's line in its
+  // own frame, i.e. the robot lies behind and beside it, about 132 degrees off its heading. The robot moves
+  // towards it at 1 m/s and brakes. A turn of up to 90 degrees (the half disk ahead) or a reversal cannot reach
+  // the robot's path with the clearance; a turn of up to 135 or 180 degrees can.
+  const core::Scan open = make_scan([](double) { return kInf; });
+  const std::vector<MovingPoint> beside = {{Vec2(-0.75, 0.4), Vec2(0.0, 1.0)}};
+  std::vector<bool> verdicts;
+  for (const double turn : {90.0, 135.0, 180.0}) {
+    planners::safety::Settings s = certifier_settings();
+    s.moving_turn_max = turn;
+    Certifier c(s);
+    c.begin(open, Vec2(-1.0, 0.0), Vec2(-1.0, 0.0), beside, 1.0);
+    verdicts.push_back(c.certify(Vec2(-1.0, 0.0)));
+  }
+  EXPECT_TRUE(verdicts[0]);
+  EXPECT_FALSE(verdicts[1]);
+  EXPECT_FALSE(verdicts[2]);
+  // Out of [90, 180]: refused.
+  planners::safety::Settings bad = certifier_settings();
+  bad.moving_turn_max = 60.0;
+  std::string error;
+  EXPECT_FALSE(bad.validate(&error));
+  EXPECT_NE(error.find("moving_turn_max"), std::string::npos) << error;
+  bad.moving_turn_max = 200.0;
+  EXPECT_FALSE(bad.validate());
+}
+
 TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
   // Without min_distance, certify_held checks the manoeuvre's checkpoints from its stop backwards and skips
   // objects whose bounding circle stays clear; with it, it follows the manoeuvre forwards and measures every

@@ -238,6 +238,11 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   cmd->add_flag("--predictor", o.planner_options.predictor,
                 "Rank plans against the target predictor (constant velocity mixed with constant turn, near "
                 "future weighted most) instead of a constant-velocity target (docs/target_prediction.md)");
+  cmd->add_option("--passive-turn", o.planner_options.passive_turn,
+                  "Safety layer: the sharpest turn, in degrees, a moving obstacle is assumed able to make while the "
+                  "robot stops (90: the half disk ahead of it; 180: any heading; docs/safety.md)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 90.0, 180.0); }, "DEG in [90, 180]"))
+      ->capture_default_str();
 
   add_protocol_options(cmd, o);
 }

@@ -67,6 +67,7 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
   s.latency = options.latency;
   s.period = options.planning_period;
   s.accel_max = options.accel_max;
+  s.moving_turn_max = options.passive_turn;
   return safety::make_shielded(std::move(planner), s);
 }
 

@@ -147,6 +147,7 @@ struct PlannerOptions {
   double latency = 0.0;          ///< s, command latency the safety layer allows for (Protocol v2)
   double planning_period = 0.05; ///< s between cycles, for the safety layer
   double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer
+  double passive_turn = 180.0;   ///< degrees, the safety layer's safety::Settings::moving_turn_max
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".

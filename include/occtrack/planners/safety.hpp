@@ -48,6 +48,10 @@ struct Settings {
   /// along its line of motion, forwards or backwards, at the fastest speed any moving point has shown this
   /// episode (at least its own). false: constant-velocity prediction only.
   bool moving_may_turn = true;
+  /// Degrees, in [90, 180]: the sharpest turn passive safety allows a moving point (moving_may_turn). The
+  /// point may be anywhere within the sector of its reach disk up to this angle either side of its heading, or
+  /// on the segment behind it (reversing); 180 is the whole disk.
+  double moving_turn_max = 180.0;
   /// m/s: the fastest a moving obstacle is expected to go. Caps the speed of moving_may_turn (a velocity
   /// estimate above it is more likely a mismatch of the tracking than an obstacle's speed).
   double moving_speed_max = 1.0;
@@ -186,10 +190,12 @@ class Certifier {
     Eigen::Vector2d center = Eigen::Vector2d::Zero(), velocity = Eigen::Vector2d::Zero();
     double radius = 0.0;             // of the circle about center holding every point
     double reach = 0.0;              // m/s at which they may turn or reverse (0: Settings::moving_may_turn off)
+    Eigen::Vector2d ahead = Eigen::Vector2d::Zero();  // unit heading (zero: none, a full disk)
   };
   std::vector<Group> groups_;
   mutable std::vector<const Group*> near_groups_;  // follow()'s scratch: the groups one manoeuvre could meet
   double clearance_ = 0.0;
+  double turn_cos_ = 0.0, turn_sin_ = 1.0;  // of Settings::moving_turn_max
 };
 
 /// Whether an object moved, from the LiDAR alone (docs/safety.md, "Motion evidence"). Perception's velocity

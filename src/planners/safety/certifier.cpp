@@ -23,6 +23,8 @@ bool Settings::validate(std::string* error) const {
   c.positive(check_spacing, "check_spacing");
   c.non_negative(moving_horizon, "moving_horizon");
   c.non_negative(moving_speed_max, "moving_speed_max");
+  c.require(moving_turn_max >= 90.0 && moving_turn_max <= 180.0, "moving_turn_max (", moving_turn_max,
+            ") must lie in [90, 180] degrees");
   c.positive(horizon, "horizon");
   c.require(horizon / step <= 1e6, "horizon / step (", horizon / step, ") must be at most 1e6 steps");
   c.require(evasive_directions >= 0 && evasive_directions <= 360, "evasive_directions (", evasive_directions,
@@ -41,6 +43,8 @@ double pseudo_angle(const Eigen::Vector2d& v) {
 }  // namespace
 
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
+  turn_cos_ = std::cos(settings_.moving_turn_max * M_PI / 180.0);
+  turn_sin_ = std::sin(settings_.moving_turn_max * M_PI / 180.0);
   moving_.reserve(512);  // the safety layer's 400 tracked points: no allocation while cycles run
   groups_.reserve(512);
   near_groups_.reserve(512);
@@ -105,6 +109,8 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     g.center = 0.5 * (lo + hi);
     for (std::size_t k = i; k < end; ++k) g.radius = std::max(g.radius, (moving_[k].position - g.center).norm());
     g.velocity = moving_[i].velocity;
+    const double speed_of = g.velocity.norm();
+    if (speed_of > 0.0) g.ahead = g.velocity / speed_of;
     g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(g.velocity.norm(), turning)) : 0.0;
     groups_.push_back(g);
     i = end;
@@ -123,14 +129,22 @@ double closest_approach(const Eigen::Vector2d& r, const Eigen::Vector2d& w, doub
 }
 
 /// The distance from a point at q (relative to a moving point) to where that point could be by now had it
-/// turned by up to 90 degrees (a half disk of radius r ahead of it, along the unit `ahead`) or reversed (a
-/// segment of length r behind it); without a heading (`ahead` zero), the whole disk. Negative inside the disk.
-double passive_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& ahead, double r) {
-  const double a = q.dot(ahead);
-  if (a >= 0.0 || ahead.isZero()) return q.norm() - r;
-  const double side = std::abs(ahead.x() * q.y() - ahead.y() * q.x());
-  const double across = std::max(0.0, side - r), behind = std::max(0.0, -a - r);
-  return std::sqrt(std::min(a * a + across * across, behind * behind + side * side));  // half disk, segment
+/// turned by up to the angle whose cosine and sine are (c, s), 90 to 180 degrees (the sector of the disk of
+/// radius r within that angle of the unit `ahead`), or reversed (a segment of length r behind it); without a
+/// heading (`ahead` zero), the whole disk. Negative inside the disk.
+double passive_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& ahead, double r, double c, double s) {
+  if (ahead.isZero()) return q.norm() - r;
+  const double a = q.dot(ahead), side = ahead.x() * q.y() - ahead.y() * q.x();  // along, and to the left
+  const double b = std::abs(side);
+  // Within the sector's angle: the bearing of q from the heading is at most the turn (c <= 0 here).
+  if (a * s >= b * c) return q.norm() - r;
+  // Outside it (behind its edges): the nearer of the edge on q's side, a segment of length r at the turn's
+  // angle, and the reversing segment.
+  const auto segment = [&](double ex, double ey) {  // from 0 to r (ex, ey), in (along, |left|) coordinates
+    const double t = std::clamp(a * ex + b * ey, 0.0, r);
+    return std::hypot(a - t * ex, b - t * ey);
+  };
+  return std::min(segment(c, s), segment(-1.0, 0.0));
 }
 }  // namespace
 
@@ -194,21 +208,22 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
            near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); },
                        stop_early);
   };
-  // Passive safety: clear of wherever a moving point could be had it turned by up to 90 degrees (a half disk
-  // ahead of it) or reversed (a segment behind it) at its reach speed.
+  // Passive safety: clear of wherever a moving point could be had it turned by up to moving_turn_max (a sector
+  // of the disk about its heading; 90 degrees: the half disk ahead) or reversed (a segment behind it) at its
+  // reach speed.
   const auto near_reach = [&](const Checkpoint& c) {
     for (const Group* group : near_groups_) {
       const Group& g = *group;
-      const double r = g.reach * c.now, speed_of = g.velocity.norm();
+      const double r = g.reach * c.now;
       if (r <= 0.0) continue;
       if ((c.p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach
       // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
-      const Eigen::Vector2d ahead = speed_of > 0.0 ? Eigen::Vector2d(g.velocity / speed_of) : Eigen::Vector2d::Zero();
+      const Eigen::Vector2d& ahead = g.ahead;
       // The distance to a translated shape moves by at most the translation: the shape at the group's centre,
       // less its radius, bounds every point's distance from below (the same verdict, fewer square roots).
-      if (passive_distance(c.p - g.center, ahead, r) - g.radius >= keep) continue;
+      if (passive_distance(c.p - g.center, ahead, r, turn_cos_, turn_sin_) - g.radius >= keep) continue;
       for (std::size_t i = g.first; i < g.last; ++i)
-        if (passive_distance(c.p - moving_[i].position, ahead, r) < keep) return true;
+        if (passive_distance(c.p - moving_[i].position, ahead, r, turn_cos_, turn_sin_) < keep) return true;
     }
     return false;
   };
