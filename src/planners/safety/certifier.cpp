@@ -111,7 +111,7 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     g.velocity = moving_[i].velocity;
     const double speed_of = g.velocity.norm();
     if (speed_of > 0.0) g.ahead = g.velocity / speed_of;
-    g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(g.velocity.norm(), turning)) : 0.0;
+    g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(speed_of, turning)) : 0.0;
     groups_.push_back(g);
     i = end;
   }
@@ -217,7 +217,8 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
       const double r = g.reach * c.now;
       if (r <= 0.0) continue;
       if ((c.p - g.center).norm() - g.radius - r >= keep) continue;  // out of the whole disk's reach
-      // Points without a heading (reported still, where something moved lately) may go anywhere: the disk.
+      // Points without a heading (g.ahead zero: reported still, where something moved lately) may go
+      // anywhere: the disk.
       const Eigen::Vector2d& ahead = g.ahead;
       // The distance to a translated shape moves by at most the translation: the shape at the group's centre,
       // less its radius, bounds every point's distance from below (the same verdict, fewer square roots).
