@@ -685,6 +685,40 @@ TEST(PolicyModel, LoadsFromAFileAndExplainsAMissingOne) {
       << planners::default_model_path(policy::Variant::fixed_q);
 }
 
+TEST(PolicyModel, TheFactoryRunsTheProjectionForTheIterationsAsked) {
+  // PlannerOptions::iterations (the command line's --iterations) reaches the projection: a cvae built by name
+  // with K = 20 plans exactly as one built with LearnedPolicySettings' projection at 20, and unlike the
+  // default of 50.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("occtrack_test_iterations_" + std::to_string(getpid()) + ".safetensors"))
+          .string();
+  io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", 3));
+  planners::PlannerOptions options;
+  options.model = path;
+  options.batch = 5;
+  auto by_default = planners::make_planner("cvae", options);
+  options.iterations = 20;
+  auto by_name = planners::make_planner("cvae", options);
+  auto settings = policy_settings(policy::Variant::cvae, 5);
+  settings.projection.iterations = 20;
+  planners::LearnedPolicy direct(settings, policy::Model::load(path));
+  std::filesystem::remove(path);
+
+  const Drive drive = forest_drive(3);
+  bool differs_from_default = false;
+  for (const auto& in : drive.inputs) {
+    const planners::PlannerOutput a = by_name->plan(in);
+    const planners::PlannerOutput b = direct.plan(in);
+    const planners::PlannerOutput c = by_default->plan(in);
+    ASSERT_TRUE(a.ok && b.ok && c.ok) << a.message << b.message << c.message;
+    ASSERT_EQ(a.plan.size(), b.plan.size());
+    for (std::size_t k = 0; k < a.plan.size(); ++k) EXPECT_EQ(a.plan[k], b.plan[k]) << "step " << k;
+    for (std::size_t k = 0; k < std::min(a.plan.size(), c.plan.size()); ++k)
+      differs_from_default = differs_from_default || (a.plan[k] - c.plan[k]).norm() > 1e-9;
+  }
+  EXPECT_TRUE(differs_from_default) << "K = 20 and K = 50 gave the same plans";
+}
+
 // ------------------------------------------------------------------------------------------------------------
 // The planner.
 

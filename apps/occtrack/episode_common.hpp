@@ -226,6 +226,11 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                 "Learned planners: rank only the B samples, not also the last plan shifted to now (the paper's policy)");
   cmd->add_flag("--no-stop{false}", o.planner_options.rank_stop,
                 "Learned planners: do not rank the stop plan besides the samples (the paper's policy has none)");
+  cmd->add_option("--iterations", o.planner_options.iterations,
+                  "Learned planners that project (cvae, cvae-fixed-q): projection iterations per cycle (0: the "
+                  "planner's default of 50; the shipped models were trained through 20)")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   cmd->add_option("--waypoints", o.planner_options.waypoints,
                   "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))

@@ -47,6 +47,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.batch = options.batch;
     s.keep_last_plan = options.keep_last_plan;
     s.rank_stop = options.rank_stop;
+    if (options.iterations > 0) s.projection.iterations = options.iterations;
     s.seed = options.seed;
     s.response_time = options.response_time;
     s.ranking.predict_target = options.predictor;

@@ -136,6 +136,9 @@ struct PlannerOptions {
   int batch = 30;           ///< learned planners: samples drawn per cycle (30; 5 for constrained hardware)
   bool keep_last_plan = true;  ///< learned planners: also rank the last plan, shifted (LearnedPolicySettings)
   bool rank_stop = true;       ///< learned planners: also rank a plan that stops (LearnedPolicySettings)
+  /// Learned planners that project (cvae, cvae-fixed-q): projection iterations per cycle (0: the planner's
+  /// default of 50, LearnedPolicySettings::projection). The shipped models were trained through K = 20.
+  int iterations = 0;
   /// s, the robot's velocity time constant: commands lead the plan by it (Protocol v2's tau; 0: v1).
   double response_time = 0.0;
   int waypoints = 0;  ///< AutoChaser: true future target points given as prior (0: constant-velocity prediction)
