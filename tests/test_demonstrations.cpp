@@ -8,7 +8,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
-#include <unistd.h>
 
 #include "occtrack/io/dataset_file.hpp"
 #include "occtrack/io/error.hpp"
@@ -17,6 +16,7 @@
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/sim/demonstrations.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
+#include "test_helpers.hpp"
 
 using namespace occtrack;
 
@@ -35,11 +35,6 @@ sim::DemonstrationSettings tiny() {
   s.jobs = 1;
   s.created_by = "test_demonstrations";
   return s;
-}
-
-std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("occtrack_test_" + std::to_string(::getpid()) + "_" + name))
-      .string();
 }
 
 /// Wraps the expert and keeps what it was given, what it returned and the record it kept of the cycle.
@@ -172,7 +167,7 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   EXPECT_EQ(report.labelled, 120);
   ASSERT_GT(report.rows, 100);
 
-  const std::string path = temp_path("demo.safetensors");
+  const std::string path = test::temp_path("demo.safetensors");
   io::write_dataset_file(path, data);
   const io::TensorFile file = io::read_safetensors(path);
   const std::int64_t S = report.rows;
@@ -526,7 +521,7 @@ TEST(Demonstrations, ReaderRefusesFilesThatBreakTheContractNamingFileAndTensor) 
   s.expert.perception.cloud_size = 3;
   s.expert.perception.nearest_count = 2;
   d.metadata = sim::demonstration_metadata(s);
-  const std::string path = temp_path("contract.safetensors");
+  const std::string path = test::temp_path("contract.safetensors");
   io::write_dataset_file(path, d);
   EXPECT_EQ(io::read_dataset_file(path).episode, d.episode);
 

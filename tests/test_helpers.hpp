@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 #include "occtrack/core/scenario.hpp"
@@ -21,6 +22,12 @@ inline core::ObstacleSpec box(const core::Vec2& center, const core::Vec2& size) 
   o.center = center;
   o.size = size;
   return o;
+}
+
+/// A path in the system's temporary folder for file NAME, unique to this process (tests run in parallel).
+inline std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("occtrack_test_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 #ifdef OCCTRACK_CONFORMANCE_DIRS

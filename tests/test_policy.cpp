@@ -8,7 +8,6 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
-#include <unistd.h>
 
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/io/scenario.hpp"
@@ -656,9 +655,7 @@ TEST(PolicyModel, RefusesAModelOfAnotherVariantOrBand) {
 }
 
 TEST(PolicyModel, LoadsFromAFileAndExplainsAMissingOne) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("occtrack_test_policy_" + std::to_string(getpid()) + ".safetensors"))
-          .string();
+  const std::string path = test::temp_path("policy.safetensors");
   io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "bc", 2));
   const policy::Model model = policy::Model::load(path);
   EXPECT_EQ(model.variant(), policy::Variant::bc);
@@ -689,9 +686,7 @@ TEST(PolicyModel, TheFactoryRunsTheProjectionForTheIterationsAsked) {
   // PlannerOptions::iterations (the command line's --iterations) reaches the projection: a cvae built by name
   // with K = 20 plans exactly as one built with LearnedPolicySettings' projection at 20, and unlike the
   // default of 50.
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("occtrack_test_iterations_" + std::to_string(getpid()) + ".safetensors"))
-          .string();
+  const std::string path = test::temp_path("iterations.safetensors");
   io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", 3));
   planners::PlannerOptions options;
   options.model = path;
