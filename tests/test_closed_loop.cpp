@@ -118,3 +118,25 @@ TEST(ClosedLoop, EpisodeSettingsAreChecked) {
   planners::Follower f;
   EXPECT_THROW(sim::run_episode(orbit(), f, s), std::invalid_argument);
 }
+
+TEST(ClosedLoop, PlannerOptionsFollowTheEpisode) {
+  sim::EpisodeSettings e;
+  e.tau = 0.3;
+  e.latency_ms = 40.0;
+  e.planning_period = 0.1;
+  e.robot_accel_max = 3.0;
+  planners::PlannerOptions mine;
+  mine.seed = 7;
+  mine.shield = true;
+  mine.batch = 5;
+  const planners::PlannerOptions o = sim::planner_options_for(e, mine);
+  EXPECT_EQ(o.response_time, 0.3);  // leads its command by the robot's lag
+  EXPECT_DOUBLE_EQ(o.latency, 0.04);
+  EXPECT_EQ(o.planning_period, 0.1);
+  EXPECT_EQ(o.accel_max, 3.0);
+  EXPECT_EQ(o.seed, 7u);  // the rest is the caller's
+  EXPECT_TRUE(o.shield);
+  EXPECT_EQ(o.batch, 5);
+  e.latency_ms.reset();  // no latency
+  EXPECT_EQ(sim::planner_options_for(e).latency, 0.0);
+}

@@ -677,12 +677,9 @@ TEST(ShieldEpisode, ShippedCvaeWithThePredictorKeepsClearOfSlidingWalls) {
   sim::EpisodeSettings settings = lagged_episode();
   settings.latency_ms = 30.0;
   settings.target_observation = sim::TargetObservation::line_of_sight;
-  planners::PlannerOptions options;
+  planners::PlannerOptions options = sim::planner_options_for(settings);
   options.shield = true;
   options.predictor = true;
-  options.response_time = settings.tau;
-  options.latency = *settings.latency_ms / 1000.0;
-  options.planning_period = settings.planning_period;
   auto planner = planners::make_planner("cvae", options);
   const auto result = sim::run_episode(scenario, *planner, settings);
   const core::EpisodeMetrics& m = result.metrics;

@@ -44,7 +44,7 @@ struct Options {
   bool rank_stop = true;
   bool shield = false;
   bool predictor = false;
-  int iterations = 50;
+  int iterations = planners::LearnedPolicySettings{}.projection.iterations;  // the planners' default
   int repeats = 1000;
   double seconds = 5.0;
   std::uint64_t seed = 1;

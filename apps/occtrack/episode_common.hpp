@@ -17,6 +17,7 @@
 
 #include "cli_support.hpp"
 #include "occtrack/core/scenario.hpp"
+#include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/sim/episode.hpp"
 
@@ -117,12 +118,10 @@ struct EpisodeCliOptions {
   /// Throws naming --response-time.
   planners::PlannerOptions planner_settings(const sim::EpisodeSettings* episode = nullptr) const {
     planners::PlannerOptions p = planner_options;
-    if (episode) {
-      p.latency = episode->latency_ms.value_or(0.0) / 1000.0;
-      p.planning_period = episode->planning_period;
-      p.accel_max = episode->robot_accel_max;
-    }
-    p.response_time = tau;
+    if (episode)
+      p = sim::planner_options_for(*episode, p);
+    else
+      p.response_time = tau;  // what the episode will take from --tau
     if (!response_time.empty())
       p.response_time = episode_cli::value("--response-time", response_time,
                                            episode_cli::check(response_time, 0.0, INFINITY));
@@ -228,7 +227,8 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                 "Learned planners: do not rank the stop plan besides the samples (the paper's policy has none)");
   cmd->add_option("--iterations", o.planner_options.iterations,
                   "Learned planners that project (cvae, cvae-fixed-q): projection iterations per cycle (0: the "
-                  "planner's default of 50; the shipped models were trained through 20)")
+                  "planner's default of " + std::to_string(planners::LearnedPolicySettings{}.projection.iterations) +
+                      "; the shipped models were trained through 20)")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   cmd->add_option("--waypoints", o.planner_options.waypoints,

@@ -54,6 +54,14 @@ bool EpisodeSettings::validate(std::string* error) const {
   return false;
 }
 
+planners::PlannerOptions planner_options_for(const EpisodeSettings& episode, planners::PlannerOptions options) {
+  options.response_time = episode.tau;
+  options.latency = episode.latency_ms.value_or(0.0) / 1000.0;
+  options.planning_period = episode.planning_period;
+  options.accel_max = episode.robot_accel_max;
+  return options;
+}
+
 namespace {
 
 // Seeds of the v2 random streams, apart from the LiDAR noise stream (settings.seed itself), so that with the

@@ -62,6 +62,11 @@ struct EpisodeResult {
   core::Trace trace;
 };
 
+/// `options` for a planner driving a robot under `episode`: the response time is the robot's lag (tau), and the
+/// safety layer learns the command latency, the planning period and the acceleration bound. The one home of
+/// this mapping; the command line and the tests call it.
+planners::PlannerOptions planner_options_for(const EpisodeSettings& episode, planners::PlannerOptions options = {});
+
 /// Runs the scenario to its duration with the planner (reset first). `progress`, when given, is called with
 /// the fraction done about once per simulated second. Throws std::invalid_argument for invalid settings.
 EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& planner, const EpisodeSettings& settings,
