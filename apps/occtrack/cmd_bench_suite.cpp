@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "episode_common.hpp"
 #include "occtrack/io/results.hpp"
+#include "run_settings.hpp"
 #include "suite_runner.hpp"
 
 namespace occtrack::app {
@@ -33,10 +34,14 @@ int run(const SuiteOptions& o) {
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;
   run.html_dir = o.html_dir;
+  std::cout << run_settings_line(run.planner, run.planner_options, run.settings) << "\n";
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
-  if (!o.json_path.empty() && !write_text_file("occtrack bench suite", o.json_path, io::suite_json(result) + "\n"))
-    return kExitInputError;
+  if (o.json_path.empty()) return kExitOk;
+  nlohmann::json j = nlohmann::json::parse(io::suite_json(result));
+  j["created_by"] = created_by("bench suite");
+  j["settings"] = run_settings_json(run.planner, run.planner_options, run.settings);
+  if (!write_text_file("occtrack bench suite", o.json_path, j.dump(2) + "\n")) return kExitInputError;
   return kExitOk;
 }
 
@@ -48,7 +53,7 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
   cmd->add_option("suite", o->suite, "Suite folder, or a name under scenarios/ (e.g. static-1ms)")->required();
   add_episode_options(cmd, o->episode);
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
-  cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary} as JSON");
+  cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary, settings, created_by} as JSON");
   cmd->add_option("--svg-dir", o->svg_dir, "Write one figure per episode into this folder");
   cmd->add_option("--html-dir", o->html_dir,
                   "Write one animated HTML replay per episode into this folder, and index.html linking them");

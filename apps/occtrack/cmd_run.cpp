@@ -11,6 +11,7 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/io/svg.hpp"
 #include "occtrack/sim/episode.hpp"
+#include "run_settings.hpp"
 
 namespace occtrack::app {
 
@@ -29,7 +30,9 @@ int run(const RunOptions& o) {
   // before anything is measured, or just below.
   sim::EpisodeSettings settings = resolve_episode_settings(o.episode, {scenario});
   settings.record_cycles = !o.html_path.empty();  // the replay shows every cycle's scan and plans
-  auto planner = planners::make_planner(o.episode.planner, o.episode.planner_settings(&settings));
+  const planners::PlannerOptions options = o.episode.planner_settings(&settings);
+  auto planner = planners::make_planner(o.episode.planner, options);
+  std::printf("%s\n", run_settings_line(o.episode.planner, options, settings).c_str());
   Progress progress(scenario.name + " (" + planner->name() + ")");
   const sim::EpisodeResult result =
       sim::run_episode(scenario, *planner, settings, [&](double f) { progress.update(f); });
@@ -55,7 +58,12 @@ int run(const RunOptions& o) {
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,
               m.target_out_of_range_s);
   bool ok = true;
-  if (!o.json_path.empty()) ok = write_text_file(kWho, o.json_path, io::episode_json(m) + "\n") && ok;
+  if (!o.json_path.empty()) {
+    nlohmann::json j = nlohmann::json::parse(io::episode_json(m));
+    j["created_by"] = created_by("run");
+    j["settings"] = run_settings_json(o.episode.planner, options, settings);
+    ok = write_text_file(kWho, o.json_path, j.dump(2) + "\n") && ok;
+  }
   if (!o.svg_path.empty()) {
     ok = write_text_file(kWho, o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
     if (ok) std::printf("  figure           %s\n", o.svg_path.c_str());
@@ -76,7 +84,7 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--svg", o->svg_path, "Write a top-down figure of the episode");
   cmd->add_option("--html", o->html_path,
                   "Write an animated replay of the episode: one self-contained HTML page (scan, plans, metrics)");
-  cmd->add_option("--json", o->json_path, "Write the episode's metrics as JSON");
+  cmd->add_option("--json", o->json_path, "Write the episode's metrics, with the settings of the run, as JSON");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
 

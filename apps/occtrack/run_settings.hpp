@@ -1,0 +1,25 @@
+// The settings a run was made with, as its result files record them. A results file should say everything
+// that changes its numbers (the planner and its options, the safety layer and the predictor, Protocol v2's
+// latency, lag, sensing noise and target observation), so that a JSON file read on its own can be compared
+// with another and rerun. The one home of this record: `bench suite --json` and `run --json` write it.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "occtrack/planners/planner.hpp"
+#include "occtrack/sim/episode.hpp"
+
+namespace occtrack::app {
+
+/// {planner: {...}, episode: {...}}: every PlannerOptions field and every EpisodeSettings field that changes
+/// results, resolved (`--latency auto` as the number it measured; a sensor setting the scenario keeps is
+/// null).
+nlohmann::json run_settings_json(const std::string& planner, const planners::PlannerOptions& options,
+                                 const sim::EpisodeSettings& episode);
+
+/// One line for a terminal, the same facts in words: "settings: planner cvae (seed 1), shield on, ...".
+std::string run_settings_line(const std::string& planner, const planners::PlannerOptions& options,
+                              const sim::EpisodeSettings& episode);
+
+}  // namespace occtrack::app
