@@ -127,7 +127,9 @@ TEST(TargetPredictor, SpreadGrowsAlongTheHorizonAndPredictMatchesStateAt) {
     predictor.state_at(0.3 + times(k), p, v);
     EXPECT_NEAR((positions.row(k).transpose() - p).norm(), 0.0, 1e-9);
     EXPECT_NEAR(sigma(k), predictor.sigma_at(0.3 + times(k)), 1e-12);
-    if (k > 0) EXPECT_GT(sigma(k), sigma(k - 1));
+    if (k > 0) {
+      EXPECT_GT(sigma(k), sigma(k - 1));
+    }
   }
 }
 
