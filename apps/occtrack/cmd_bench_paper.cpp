@@ -19,6 +19,7 @@
 #include "episode_common.hpp"
 #include "occtrack/io/paper_tables.hpp"
 #include "occtrack/io/results.hpp"
+#include "run_settings.hpp"
 #include "suite_runner.hpp"
 
 namespace fs = std::filesystem;
@@ -131,7 +132,8 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
   return lines;
 }
 
-void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows, const std::vector<std::string>& header,
+void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows,
+                   const std::vector<nlohmann::json>& row_settings, const std::vector<std::string>& header,
                    const PaperOptions& o) {
   const std::string who = "occtrack bench paper";
   if (!write_text_file(who, (out / "tables.md").string(), io::paper_tables(rows, header)) ||
@@ -143,11 +145,14 @@ void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows, c
   j["settings"] = header;
   j["episodes_per_suite"] = o.episodes;
   j["runs"] = nlohmann::json::array();
-  for (const auto& r : rows)
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const io::PaperRow& r = rows[i];
     j["runs"].push_back({{"label", r.label},
                          {"compute_scale", r.compute_scale},
                          {"latency_ms", r.latency_ms},
+                         {"settings", row_settings[i]},
                          {"result", nlohmann::json::parse(io::suite_json(r.result))}});
+  }
   if (!write_text_file(who, (out / "episodes.json").string(), j.dump(1) + "\n"))
     throw std::runtime_error(out.string() + ": cannot write the results");
 }
@@ -187,6 +192,7 @@ int run(const PaperOptions& o) {
   const fs::path out(o.out);
   fs::create_directories(out);
   std::vector<io::PaperRow> rows;
+  std::vector<nlohmann::json> row_settings;  // each row's settings, resolved (run_settings.hpp)
   bool failed = false;
   const std::size_t total = runnable.size() * o.compute_scales.size() * suites.size();
   std::size_t started = 0;
@@ -210,15 +216,16 @@ int run(const PaperOptions& o) {
           row.latency_ms = run.settings.latency_ms.value_or(0.0);
           row.result = run_suite(suite, run);
           rows.push_back(std::move(row));
+          row_settings.push_back(run_settings_json(run.planner, run.planner_options, run.settings));
         } catch (const std::exception& e) {
           std::fprintf(stderr, "occtrack bench paper: %s failed: %s\n", name.c_str(), e.what());
           not_run.push_back(name + " (" + e.what() + ")");
           failed = true;
         }
-        write_outputs(out, rows, settings_lines(o, scales, not_run), o);
+        write_outputs(out, rows, row_settings, settings_lines(o, scales, not_run), o);
       }
   const std::vector<std::string> header = settings_lines(o, scales, not_run);
-  write_outputs(out, rows, header, o);
+  write_outputs(out, rows, row_settings, header, o);
   std::cout << io::paper_tables(rows, header);
   std::fprintf(stderr, "occtrack bench paper: wrote %s, %s and %s\n", (out / "tables.md").c_str(),
                (out / "tradeoff.svg").c_str(), (out / "episodes.json").c_str());
