@@ -14,6 +14,8 @@ import glob
 import json
 import sys
 
+import svg_figure
+
 COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"]
 
 
@@ -67,10 +69,7 @@ def main():
     def sy(y):
         return top + ph * (1 - y / y_max)
 
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
-           f'font-family="sans-serif" font-size="12">',
-           f'<rect width="{width}" height="{height}" fill="white"/>',
-           f'<text x="{left}" y="{top - 15}" font-size="14">{args.title}</text>']
+    out = svg_figure.begin(width, height, args.title, left, top - 15)
     step = 10 ** max(0, len(str(int(y_max))) - 1)
     if y_max / step < 3:
         step /= 2
@@ -108,9 +107,7 @@ def main():
         ly = top + ph + 40 + 18 * k
         out.append(f'<circle cx="{left + 6}" cy="{ly - 4}" r="4" fill="{colour}"/>')
         out.append(f'<text x="{left + 16}" y="{ly}">{label} ({len(runs)} runs)</text>')
-    out.append("</svg>")
-    with open(args.out, "w", encoding="utf-8") as f:
-        f.write("\n".join(out) + "\n")
+    svg_figure.save(args.out, out)
 
 
 if __name__ == "__main__":

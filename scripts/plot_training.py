@@ -12,6 +12,8 @@ import math
 import re
 import sys
 
+import svg_figure
+
 STEP = re.compile(r"step (\d+)/\d+\s+loss ([-\d.e+]+) \(mse ([-\d.e+]+)")
 VALIDATION = re.compile(r"\| validation loss ([-\d.e+]+) \(mse ([-\d.e+]+)")
 COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"]
@@ -62,11 +64,8 @@ def main():
     def sy(y):
         return top + ph * (1 - (math.log10(max(y, 10.0**lo)) - lo) / (hi - lo))
 
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
-           f'font-family="sans-serif" font-size="12">',
-           f'<rect width="{width}" height="{height}" fill="white"/>']
     title = args.title or f"training ({args.term}, solid) and validation (dashed) loss"
-    out.append(f'<text x="{left}" y="{top - 15}" font-size="14">{title}</text>')
+    out = svg_figure.begin(width, height, title, left, top - 15)
     for e in range(lo, hi + 1):
         y = sy(10.0**e)
         out.append(f'<line x1="{left}" x2="{left + pw}" y1="{y:.1f}" y2="{y:.1f}" stroke="#ddd"/>')
@@ -91,9 +90,7 @@ def main():
         out.append(f'<text x="{left + pw + 45}" y="{ly + 4}">{label}</text>')
         if validation:
             out.append(f'<text x="{left + pw + 45}" y="{ly + 18}" fill="#555">validation {validation[-1][1]:.4g}</text>')
-    out.append("</svg>")
-    with open(args.out, "w", encoding="utf-8") as f:
-        f.write("\n".join(out) + "\n")
+    svg_figure.save(args.out, out)
 
 
 if __name__ == "__main__":
