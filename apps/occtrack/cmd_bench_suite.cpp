@@ -37,11 +37,11 @@ int run(const SuiteOptions& o) {
   std::cout << run_settings_line(run.planner, run.planner_options, run.settings) << "\n";
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
-  if (o.json_path.empty()) return kExitOk;
-  nlohmann::json j = nlohmann::json::parse(io::suite_json(result));
-  j["created_by"] = created_by("bench suite");
-  j["settings"] = run_settings_json(run.planner, run.planner_options, run.settings);
-  if (!write_text_file("occtrack bench suite", o.json_path, j.dump(2) + "\n")) return kExitInputError;
+  if (!o.json_path.empty() &&
+      !write_text_file("occtrack bench suite", o.json_path,
+                       results_with_settings(io::suite_json(result), "bench suite", run.planner, run.planner_options,
+                                             run.settings)))
+    return kExitInputError;
   return kExitOk;
 }
 

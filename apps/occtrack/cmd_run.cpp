@@ -58,12 +58,10 @@ int run(const RunOptions& o) {
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,
               m.target_out_of_range_s);
   bool ok = true;
-  if (!o.json_path.empty()) {
-    nlohmann::json j = nlohmann::json::parse(io::episode_json(m));
-    j["created_by"] = created_by("run");
-    j["settings"] = run_settings_json(o.episode.planner, options, settings);
-    ok = write_text_file(kWho, o.json_path, j.dump(2) + "\n") && ok;
-  }
+  if (!o.json_path.empty())
+    ok = write_text_file(kWho, o.json_path,
+                         results_with_settings(io::episode_json(m), "run", o.episode.planner, options, settings)) &&
+         ok;
   if (!o.svg_path.empty()) {
     ok = write_text_file(kWho, o.svg_path, io::episode_svg(scenario, result.trace, m)) && ok;
     if (ok) std::printf("  figure           %s\n", o.svg_path.c_str());

@@ -2,6 +2,8 @@
 
 #include <sstream>
 
+#include "cli_support.hpp"
+
 namespace occtrack::app {
 
 namespace {
@@ -53,6 +55,15 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"planning_period_s", e.planning_period},
                   {"robot_accel_max", e.robot_accel_max}};
   return j;
+}
+
+std::string results_with_settings(const std::string& results_json, const std::string& command,
+                                  const std::string& planner, const planners::PlannerOptions& options,
+                                  const sim::EpisodeSettings& episode) {
+  nlohmann::json j = nlohmann::json::parse(results_json);
+  j["created_by"] = created_by(command);
+  j["settings"] = run_settings_json(planner, options, episode);
+  return j.dump(2) + "\n";
 }
 
 std::string run_settings_line(const std::string& planner, const planners::PlannerOptions& p,

@@ -18,6 +18,12 @@ namespace occtrack::app {
 nlohmann::json run_settings_json(const std::string& planner, const planners::PlannerOptions& options,
                                  const sim::EpisodeSettings& episode);
 
+/// A results file: `results_json` (io::suite_json or io::episode_json) with "created_by" for `command` and the
+/// "settings" above added, as text.
+std::string results_with_settings(const std::string& results_json, const std::string& command,
+                                  const std::string& planner, const planners::PlannerOptions& options,
+                                  const sim::EpisodeSettings& episode);
+
 /// One line for a terminal, the same facts in words: "settings: planner cvae (seed 1), shield on, ...".
 std::string run_settings_line(const std::string& planner, const planners::PlannerOptions& options,
                               const sim::EpisodeSettings& episode);
