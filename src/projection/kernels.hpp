@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cstddef>
 
 namespace occtrack::projection::detail {
 
@@ -123,6 +124,41 @@ struct ObstaclePoints {
   int padded_count;  // N rounded up to the SIMD width
 };
 
+/// Scratch space of obstacle_term for N points, each array N rounded up to the SIMD width long.
+template <typename T>
+struct ObstacleScratch {
+  int* candidates;  // points near a span of chunks, in index order
+  int* near;        // positions in `candidates` of the points near the chunk in hand
+  T* x;             // the candidates' x, y, vx, vy, padded with far-away points
+  T* y;
+  T* vx;
+  T* vy;
+};
+
+/// Axis-aligned box of the positions of one chunk of steps (or a span of chunks) and its time span.
+template <typename T>
+struct ChunkBox {
+  T x_min, x_max, y_min, y_max, t_first, t_last;
+};
+
+/// Bit i set where point lane i of (ox, oy, vx, vy) comes within sqrt(keep_squared) of `box` at some time in its
+/// time span: the point's swept box over the span is tested against the box (a conservative test).
+template <typename T>
+unsigned near_box_bits(const typename Simd<T>::Packet& ox, const typename Simd<T>::Packet& oy,
+                       const typename Simd<T>::Packet& vx, const typename Simd<T>::Packet& vy,
+                       const ChunkBox<T>& box, const typename Simd<T>::Packet& keep_squared) {
+  using Packet = typename Simd<T>::Packet;
+  const Packet zero = ei::pset1<Packet>(T(0));
+  const Packet t_first = ei::pset1<Packet>(box.t_first), t_last = ei::pset1<Packet>(box.t_last);
+  const Packet x_a = ei::pmadd(vx, t_first, ox), x_b = ei::pmadd(vx, t_last, ox);
+  const Packet y_a = ei::pmadd(vy, t_first, oy), y_b = ei::pmadd(vy, t_last, oy);
+  const Packet gap_x = ei::pmax(ei::pmax(ei::psub(ei::pmin(x_a, x_b), ei::pset1<Packet>(box.x_max)),
+                                         ei::psub(ei::pset1<Packet>(box.x_min), ei::pmax(x_a, x_b))), zero);
+  const Packet gap_y = ei::pmax(ei::pmax(ei::psub(ei::pmin(y_a, y_b), ei::pset1<Packet>(box.y_max)),
+                                         ei::psub(ei::pset1<Packet>(box.y_min), ei::pmax(y_a, y_b))), zero);
+  return less_equal_bits(ei::pmadd(gap_x, gap_x, ei::pmul(gap_y, gap_y)), keep_squared);
+}
+
 /// Obstacle term for one sample (steps 2 and 6; the targets of step 8 as a correction). For every padded
 /// step k and point j, w = p - p_o,j(t_k): writes to `excess` the sum over points of
 /// e_o,j - p = (max(a, |w|)/|w| - 1) w, which is zero outside the disks, and returns the sum over valid
@@ -131,12 +167,15 @@ struct ObstaclePoints {
 /// Steps are taken a SIMD width at a time. For each such chunk, points whose swept position over the
 /// chunk's time stays farther than a (1 + margin) from the bounding box of the chunk's positions contribute
 /// exactly zero to both sums and are skipped; the others are visited in index order, so the result is the
-/// same as visiting every point. `near` is scratch space for N indices.
+/// same as visiting every point. The test runs in two rounds: every point against the box of a span of
+/// kSpan chunks, then only the points that pass (the candidates) against each chunk of the span. A point
+/// near a chunk is near its span, so both rounds keep the same points as testing every point per chunk.
 template <typename T>
 T obstacle_term(const StepGrid<T>& grid, AxisArrays<const T> position, const ObstaclePoints<T>& points, T radius,
-                int* near, AxisArrays<T> excess) {
+                const ObstacleScratch<T>& scratch, AxisArrays<T> excess) {
   using S = Simd<T>;
   using Packet = typename S::Packet;
+  constexpr int kSpan = 4;
   const T* px = position.x;
   const T* py = position.y;
   const T* times = grid.times;
@@ -149,70 +188,172 @@ T obstacle_term(const StepGrid<T>& grid, AxisArrays<const T> position, const Obs
   const T keep_radius = radius * (sizeof(T) == 4 ? T(1.001) : T(1.000001));
   const Packet keep_squared = ei::pset1<Packet>(keep_radius * keep_radius);
   Packet squared_total = zero;
-  for (int k = 0; k < grid.padded_steps; k += S::width) {
-    const Packet x = ei::padd(ei::ploadu<Packet>(px + k), nudge);
-    const Packet y = ei::ploadu<Packet>(py + k);
-    const Packet t = ei::ploadu<Packet>(times + k);
-
-    // Bounding box of the chunk's valid positions, and its time span.
-    const int valid = std::min(S::width, grid.steps - k);
-    T x_min = px[k], x_max = px[k], y_min = py[k], y_max = py[k];
-    if (valid == S::width) {
-      x_min = ei::predux_min(x);
-      x_max = ei::predux_max(x);
-      y_min = ei::predux_min(y);
-      y_max = ei::predux_max(y);
-    } else {
-      for (int i = 1; i < valid; ++i) {
-        x_min = std::min(x_min, px[k + i] + S::nudge);
-        x_max = std::max(x_max, px[k + i] + S::nudge);
-        y_min = std::min(y_min, py[k + i]);
-        y_max = std::max(y_max, py[k + i]);
+  for (int span = 0; span < grid.padded_steps; span += kSpan * S::width) {
+    // Boxes of the span's chunks (their valid positions and time spans), and of the span.
+    ChunkBox<T> boxes[kSpan] = {};
+    const int chunks = std::min(kSpan, (grid.padded_steps - span) / S::width);
+    for (int c = 0; c < chunks; ++c) {
+      const int k = span + c * S::width;
+      const int valid = std::min(S::width, grid.steps - k);
+      ChunkBox<T>& box = boxes[c];
+      box.x_min = box.x_max = px[k] + S::nudge;
+      box.y_min = box.y_max = py[k];
+      if (valid == S::width) {
+        const Packet x = ei::padd(ei::ploadu<Packet>(px + k), nudge);
+        const Packet y = ei::ploadu<Packet>(py + k);
+        box.x_min = ei::predux_min(x);
+        box.x_max = ei::predux_max(x);
+        box.y_min = ei::predux_min(y);
+        box.y_max = ei::predux_max(y);
+      } else {
+        for (int i = 1; i < valid; ++i) {
+          box.x_min = std::min(box.x_min, px[k + i] + S::nudge);
+          box.x_max = std::max(box.x_max, px[k + i] + S::nudge);
+          box.y_min = std::min(box.y_min, py[k + i]);
+          box.y_max = std::max(box.y_max, py[k + i]);
+        }
       }
-      x_min = std::min(x_min, px[k] + S::nudge);
-      x_max = std::max(x_max, px[k] + S::nudge);
+      box.t_first = times[k];
+      box.t_last = times[k + valid - 1];
     }
-    const Packet box_x_min = ei::pset1<Packet>(x_min), box_x_max = ei::pset1<Packet>(x_max);
-    const Packet box_y_min = ei::pset1<Packet>(y_min), box_y_max = ei::pset1<Packet>(y_max);
-    const Packet t_first = ei::pset1<Packet>(times[k]), t_last = ei::pset1<Packet>(times[k + valid - 1]);
+    ChunkBox<T> whole = boxes[0];
+    for (int c = 1; c < chunks; ++c) {
+      whole.x_min = std::min(whole.x_min, boxes[c].x_min);
+      whole.x_max = std::max(whole.x_max, boxes[c].x_max);
+      whole.y_min = std::min(whole.y_min, boxes[c].y_min);
+      whole.y_max = std::max(whole.y_max, boxes[c].y_max);
+    }
+    whole.t_last = boxes[chunks - 1].t_last;
 
-    // Which points come within keep_radius of the box during the chunk.
-    int near_count = 0;
+    // Round one: the points that come near the span, copied in index order and padded with far-away points.
+    int candidate_count = 0;
     for (int j = 0; j < points.padded_count; j += S::width) {
-      const Packet ox = ei::ploadu<Packet>(points.x + j), oy = ei::ploadu<Packet>(points.y + j);
-      const Packet vx = ei::ploadu<Packet>(points.vx + j), vy = ei::ploadu<Packet>(points.vy + j);
-      const Packet x_a = ei::pmadd(vx, t_first, ox), x_b = ei::pmadd(vx, t_last, ox);
-      const Packet y_a = ei::pmadd(vy, t_first, oy), y_b = ei::pmadd(vy, t_last, oy);
-      const Packet gap_x = ei::pmax(ei::pmax(ei::psub(ei::pmin(x_a, x_b), box_x_max),
-                                             ei::psub(box_x_min, ei::pmax(x_a, x_b))), zero);
-      const Packet gap_y = ei::pmax(ei::pmax(ei::psub(ei::pmin(y_a, y_b), box_y_max),
-                                             ei::psub(box_y_min, ei::pmax(y_a, y_b))), zero);
-      unsigned bits = less_equal_bits(ei::pmadd(gap_x, gap_x, ei::pmul(gap_y, gap_y)), keep_squared);
+      unsigned bits = near_box_bits<T>(ei::ploadu<Packet>(points.x + j), ei::ploadu<Packet>(points.y + j),
+                                       ei::ploadu<Packet>(points.vx + j), ei::ploadu<Packet>(points.vy + j),
+                                       whole, keep_squared);
       while (bits != 0) {
-        near[near_count++] = j + __builtin_ctz(bits);
+        const int point = j + __builtin_ctz(bits);
+        scratch.candidates[candidate_count] = point;
+        scratch.x[candidate_count] = points.x[point];
+        scratch.y[candidate_count] = points.y[point];
+        scratch.vx[candidate_count] = points.vx[point];
+        scratch.vy[candidate_count] = points.vy[point];
+        ++candidate_count;
         bits &= bits - 1;
       }
     }
-
-    Packet ex = zero, ey = zero, squared = zero;
-    for (int i = 0; i < near_count; ++i) {
-      const T* point = points.xyv + 4 * near[i];
-      const Packet wx = ei::psub(x, ei::pmadd(ei::pset1<Packet>(point[2]), t, ei::pset1<Packet>(point[0])));
-      const Packet wy = ei::psub(y, ei::pmadd(ei::pset1<Packet>(point[3]), t, ei::pset1<Packet>(point[1])));
-      const Packet r2 = ei::pmax(ei::pmadd(wx, wx, ei::pmul(wy, wy)), tiny);
-      const Packet inv = S::inverse_sqrt(r2);
-      // e_o - p = p_o + a d_o u - p = (a d_o / |w| - 1) w, with a d_o = max(a, |w|).
-      const Packet excess_scale = ei::pmax(ei::psub(ei::pmul(a, inv), one), zero);
-      ex = ei::pmadd(excess_scale, wx, ex);
-      ey = ei::pmadd(excess_scale, wy, ey);
-      // |r_o| = max(0, a - |w|) = |w| excess_scale, so |r_o|^2 = |w|^2 excess_scale^2.
-      squared = ei::pmadd(r2, ei::pmul(excess_scale, excess_scale), squared);
+    const int candidate_padded = (candidate_count + S::width - 1) / S::width * S::width;
+    for (int i = candidate_count; i < candidate_padded; ++i) {
+      scratch.x[i] = scratch.y[i] = T(1e15);
+      scratch.vx[i] = scratch.vy[i] = T(0);
     }
-    ei::pstoreu(excess.x + k, ex);
-    ei::pstoreu(excess.y + k, ey);
-    squared_total = ei::pmadd(squared, ei::ploadu<Packet>(grid.mask + k), squared_total);
+
+    for (int c = 0; c < chunks; ++c) {
+      const int k = span + c * S::width;
+      // Round two: the candidates near this chunk.
+      int near_count = 0;
+      for (int j = 0; j < candidate_padded; j += S::width) {
+        unsigned bits = near_box_bits<T>(ei::ploadu<Packet>(scratch.x + j), ei::ploadu<Packet>(scratch.y + j),
+                                         ei::ploadu<Packet>(scratch.vx + j), ei::ploadu<Packet>(scratch.vy + j),
+                                         boxes[c], keep_squared);
+        while (bits != 0) {
+          scratch.near[near_count++] = scratch.candidates[j + __builtin_ctz(bits)];
+          bits &= bits - 1;
+        }
+      }
+
+      const Packet x = ei::padd(ei::ploadu<Packet>(px + k), nudge);
+      const Packet y = ei::ploadu<Packet>(py + k);
+      const Packet t = ei::ploadu<Packet>(times + k);
+      Packet ex = zero, ey = zero, squared = zero;
+      for (int i = 0; i < near_count; ++i) {
+        const T* point = points.xyv + 4 * scratch.near[i];
+        const Packet wx = ei::psub(x, ei::pmadd(ei::pset1<Packet>(point[2]), t, ei::pset1<Packet>(point[0])));
+        const Packet wy = ei::psub(y, ei::pmadd(ei::pset1<Packet>(point[3]), t, ei::pset1<Packet>(point[1])));
+        const Packet r2 = ei::pmax(ei::pmadd(wx, wx, ei::pmul(wy, wy)), tiny);
+        const Packet inv = S::inverse_sqrt(r2);
+        // e_o - p = p_o + a d_o u - p = (a d_o / |w| - 1) w, with a d_o = max(a, |w|).
+        const Packet excess_scale = ei::pmax(ei::psub(ei::pmul(a, inv), one), zero);
+        ex = ei::pmadd(excess_scale, wx, ex);
+        ey = ei::pmadd(excess_scale, wy, ey);
+        // |r_o| = max(0, a - |w|) = |w| excess_scale, so |r_o|^2 = |w|^2 excess_scale^2.
+        squared = ei::pmadd(r2, ei::pmul(excess_scale, excess_scale), squared);
+      }
+      ei::pstoreu(excess.x + k, ex);
+      ei::pstoreu(excess.y + k, ey);
+      squared_total = ei::pmadd(squared, ei::ploadu<Packet>(grid.mask + k), squared_total);
+    }
   }
   return ei::predux(squared_total);
+}
+
+/// Step 1 for one sample: the values of both axes on the padded grid, value = G c, for c = cx and cy. G is
+/// column-major, `rows` x n, with `rows` a multiple of the SIMD width. Four row chunks at a time share the
+/// broadcast coefficients, and both axes share every load of G: eight independent sums keep the FMA units busy.
+template <typename T>
+void basis_product(const T* G, int rows, int n, const T* cx, const T* cy, T* value_x, T* value_y) {
+  using Packet = typename Simd<T>::Packet;
+  constexpr int W = Simd<T>::width;
+  int r = 0;
+  for (; r + 4 * W <= rows; r += 4 * W) {
+    Packet x0 = ei::pset1<Packet>(T(0)), x1 = x0, x2 = x0, x3 = x0, y0 = x0, y1 = x0, y2 = x0, y3 = x0;
+    for (int k = 0; k < n; ++k) {
+      const T* g = G + static_cast<std::ptrdiff_t>(k) * rows + r;
+      const Packet bx = ei::pset1<Packet>(cx[k]), by = ei::pset1<Packet>(cy[k]);
+      const Packet g0 = ei::ploadu<Packet>(g), g1 = ei::ploadu<Packet>(g + W);
+      const Packet g2 = ei::ploadu<Packet>(g + 2 * W), g3 = ei::ploadu<Packet>(g + 3 * W);
+      x0 = ei::pmadd(g0, bx, x0), y0 = ei::pmadd(g0, by, y0);
+      x1 = ei::pmadd(g1, bx, x1), y1 = ei::pmadd(g1, by, y1);
+      x2 = ei::pmadd(g2, bx, x2), y2 = ei::pmadd(g2, by, y2);
+      x3 = ei::pmadd(g3, bx, x3), y3 = ei::pmadd(g3, by, y3);
+    }
+    ei::pstoreu(value_x + r, x0), ei::pstoreu(value_x + r + W, x1);
+    ei::pstoreu(value_x + r + 2 * W, x2), ei::pstoreu(value_x + r + 3 * W, x3);
+    ei::pstoreu(value_y + r, y0), ei::pstoreu(value_y + r + W, y1);
+    ei::pstoreu(value_y + r + 2 * W, y2), ei::pstoreu(value_y + r + 3 * W, y3);
+  }
+  for (; r < rows; r += W) {
+    Packet x0 = ei::pset1<Packet>(T(0)), y0 = x0;
+    for (int k = 0; k < n; ++k) {
+      const Packet g0 = ei::ploadu<Packet>(G + static_cast<std::ptrdiff_t>(k) * rows + r);
+      x0 = ei::pmadd(g0, ei::pset1<Packet>(cx[k]), x0);
+      y0 = ei::pmadd(g0, ei::pset1<Packet>(cy[k]), y0);
+    }
+    ei::pstoreu(value_x + r, x0);
+    ei::pstoreu(value_y + r, y0);
+  }
+}
+
+/// `Columns` consecutive columns of G' d for both axes (see basis_transpose_product).
+template <typename T, int Columns>
+void basis_transpose_columns(const T* G, int rows, int k, const T* dx, const T* dy, T* hx, T* hy) {
+  using Packet = typename Simd<T>::Packet;
+  constexpr int W = Simd<T>::width;
+  Packet sx[Columns], sy[Columns];
+  for (int c = 0; c < Columns; ++c) sx[c] = sy[c] = ei::pset1<Packet>(T(0));
+  const T* g = G + static_cast<std::ptrdiff_t>(k) * rows;
+  for (int r = 0; r < rows; r += W) {
+    const Packet px = ei::ploadu<Packet>(dx + r), py = ei::ploadu<Packet>(dy + r);
+    for (int c = 0; c < Columns; ++c) {
+      const Packet gc = ei::ploadu<Packet>(g + static_cast<std::ptrdiff_t>(c) * rows + r);
+      sx[c] = ei::pmadd(gc, px, sx[c]);
+      sy[c] = ei::pmadd(gc, py, sy[c]);
+    }
+  }
+  for (int c = 0; c < Columns; ++c) {
+    hx[k + c] = ei::predux(sx[c]);
+    hy[k + c] = ei::predux(sy[c]);
+  }
+}
+
+/// Step 7's product for one sample: h = G' d for d = dx and dy (G column-major, `rows` x n, `rows` a multiple
+/// of the SIMD width). Four columns of G at a time, so that both axes' eight sums run side by side.
+template <typename T>
+void basis_transpose_product(const T* G, int rows, int n, const T* dx, const T* dy, T* hx, T* hy) {
+  int k = 0;
+  for (; k + 4 <= n; k += 4) basis_transpose_columns<T, 4>(G, rows, k, dx, dy, hx, hy);
+  for (; k + 2 <= n; k += 2) basis_transpose_columns<T, 2>(G, rows, k, dx, dy, hx, hy);
+  for (; k < n; ++k) basis_transpose_columns<T, 1>(G, rows, k, dx, dy, hx, hy);
 }
 
 /// Where a norm-band family measures from: w = value - (x0 + vx t, y0 + vy t). Zero for velocity and

@@ -64,8 +64,10 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 // ------------------------------------------------------------------------------------------------
 // Setup-time data (the "cache": factored once) and per-thread scratch space (the "workspace").
 //
-// Coefficients of a chunk of samples are held column-wise: column 2b is the x axis of sample b and column
-// 2b + 1 its y axis, so one matrix product evaluates every sample and axis at once. Step arrays are padded
+// Coefficients of a block of samples are held column-wise: column 2b is the x axis of sample b and column
+// 2b + 1 its y axis, so that the KKT products of step 9 take the block at once. Steps 1 to 7 run one sample
+// at a time (kernels.hpp, basis_product and basis_transpose_product), so that its values and corrections,
+// 3 mp x 2 each, stay in the L1 cache with G between the products and the kernels. Step arrays are padded
 // to a multiple of the SIMD width; the basis rows of the padding are zero, so padded entries never reach
 // the coefficients, and a 0/1 mask keeps them out of the residual.
 //
@@ -81,27 +83,28 @@ int round_up(int value, int multiple) { return (value + multiple - 1) / multiple
 //  - Pre-inverted KKT blocks: M11, M12 and M11 (Q - rho_p I) come from KktFactors (kkt.hpp), and Bias, the
 //    part of xi_{k+1} no iteration changes, is formed once per block.
 //  - Far-point skipping: the obstacle kernel skips the points that cannot come within a of a chunk of steps;
-//    they contribute exact zeros (kernels.hpp, obstacle_term).
+//    they contribute exact zeros. It finds them in two rounds, first for a span of four chunks, then for each
+//    chunk among the span's candidates (kernels.hpp, obstacle_term).
 //  - unit(w) without trigonometry, w / |w|, with unit(0) = (1, 0) through a nudge (kernels.hpp).
 // The projection twin in torch (src/learning/projection.cpp) uses the same arrangement.
 template <typename T>
 struct Projector<T>::Impl {
-  // Samples are solved in blocks: a block's matrices stay in the L1/L2 cache through all K iterations,
-  // and the scratch space of its largest product (G' S, 3 mp x 2 block values) stays under Eigen's 128 KB
-  // stack limit, so that no solve allocates (tests/test_no_allocation.cpp). 16 samples with the defaults.
+  // Samples are solved in blocks of up to 16: a block's coefficient matrices stay in the cache through all
+  // K iterations, and its KKT products (n x n times n x 2 block) stay small enough that Eigen needs no heap
+  // for them, so that no solve allocates (tests/test_no_allocation.cpp).
   static constexpr int kMaxBlock = 16;
-  static constexpr std::size_t kScratchBudget = 96 * 1024;
 
   struct Workspace {
     int first = 0, count = 0;  // this thread's samples [first, first + count), solved a block at a time
     int block_first = 0, block_count = 0;  // the block in hand
     Matrix<T> C, C_next, Lambda, Bias, Rhs, H;  // n x 2count
-    Matrix<T> Eval;                              // 3 mp x 2count: p, pd, pdd at every padded step
-    Matrix<T> Delta;                             // 3 mp x 2count: the weighted corrections S
+    Matrix<T> Eval;                              // 3 mp x 2: p, pd, pdd of the sample in hand, every padded step
+    Matrix<T> Delta;                             // 3 mp x 2: its weighted corrections S
     Matrix<T> Bound_min, Bound_max;              // mp x count: tracking band, padded
     Vector<T> obstacle_x, obstacle_y;            // mp: sum over points of e_o - p
     Matrix<T> Points;                            // 4 Np x count: x, y, vx, vy of each sample's points
-    std::vector<int> near;                       // Np: points near the current chunk of steps
+    std::vector<int> candidates, near;           // Np each: points near a span of steps, and near a chunk
+    Vector<T> candidate_points;                  // 4 Np: x, y, vx, vy of the candidates
   };
 
   /// The settings' scalars in T, converted once.
@@ -129,10 +132,10 @@ struct Projector<T>::Impl {
   KktFactors<T> kkt;  // validates the settings first
   Scalars scalars{};
   int n = 0, m = 0, mp = 0, Np = 0;
-  int block_size = 1;  // samples per block
-  Matrix<T> G;         // 3 mp x n: [P; Pd; Pdd], padded with zero rows
-  Vector<T> times;     // mp
-  Vector<T> mask;      // mp: 1 on valid steps, 0 on padding
+  int block_size = kMaxBlock;  // samples per block
+  Matrix<T> G;                 // 3 mp x n: [P; Pd; Pdd], padded with zero rows
+  Vector<T> times;             // mp
+  Vector<T> mask;              // mp: 1 on valid steps, 0 on padding
   detail::StepGrid<T> grid{};
   std::vector<Workspace> workspaces;
 
@@ -157,8 +160,6 @@ struct Projector<T>::Impl {
     mask.head(m).setOnes();
     grid = {times.data(), mask.data(), m, mp};
 
-    const std::size_t per_sample = 3 * static_cast<std::size_t>(mp) * 2 * sizeof(T);
-    block_size = static_cast<int>(std::clamp<std::size_t>(kScratchBudget / per_sample, 1, kMaxBlock));
     const int threads = std::min(settings.threads, settings.batch);
     workspaces.resize(threads);
     for (int t = 0; t < threads; ++t) {
@@ -168,14 +169,16 @@ struct Projector<T>::Impl {
       const int block = std::min(w.count, block_size);
       const int cols = 2 * block;
       for (Matrix<T>* M : {&w.C, &w.C_next, &w.Lambda, &w.Bias, &w.Rhs, &w.H}) M->setZero(n, cols);
-      w.Eval.setZero(3 * mp, cols);
-      w.Delta.setZero(3 * mp, cols);
+      w.Eval.setZero(3 * mp, 2);
+      w.Delta.setZero(3 * mp, 2);
       w.Bound_min.setZero(mp, block);
       w.Bound_max.setZero(mp, block);
       for (Vector<T>* v : {&w.obstacle_x, &w.obstacle_y}) v->setZero(mp);
       // Padding points sit far away, so that they are never near a trajectory.
       w.Points.setConstant(4 * Np, block, T(1e15));
+      w.candidates.assign(Np, 0);
       w.near.assign(Np, 0);
+      w.candidate_points.setZero(4 * Np);
     }
   }
 
@@ -203,17 +206,17 @@ struct Projector<T>::Impl {
 
   // ---- One iteration, shared/spec/projection.md steps 1 to 9, on a block of samples. ----
 
-  // Step 1: p, pd, pdd of every sample and axis of the block on the padded grid: Eval = G xi.
-  void evaluate_trajectories(Workspace& w) const {
-    const int cols = 2 * w.block_count;
-    w.Eval.leftCols(cols).noalias() = G * w.C.leftCols(cols);
+  // Step 1: p, pd, pdd of sample i of the block, both axes, on the padded grid: Eval = G xi.
+  void evaluate_trajectory(Workspace& w, int i) const {
+    detail::basis_product<T>(G.data(), 3 * mp, n, w.C.col(2 * i).data(), w.C.col(2 * i + 1).data(),
+                             w.Eval.col(0).data(), w.Eval.col(1).data());
   }
 
   SampleArrays sample_arrays(Workspace& w, int i) const {
-    const T* px = w.Eval.col(2 * i).data();
-    const T* py = w.Eval.col(2 * i + 1).data();
-    T* dx = w.Delta.col(2 * i).data();
-    T* dy = w.Delta.col(2 * i + 1).data();
+    const T* px = w.Eval.col(0).data();
+    const T* py = w.Eval.col(1).data();
+    T* dx = w.Delta.col(0).data();
+    T* dy = w.Delta.col(1).data();
     return {w.block_first + i,
             i,
             {px, py},
@@ -232,7 +235,10 @@ struct Projector<T>::Impl {
     const T* soa = w.Points.col(s.i).data();
     const detail::ObstaclePoints<T> points{problem.obstacles.row(s.b).data(), soa, soa + Np, soa + 2 * Np,
                                            soa + 3 * Np, settings.obstacles, Np};
-    return detail::obstacle_term<T>(grid, s.position, points, scalars.radius, w.near.data(),
+    T* candidate = w.candidate_points.data();
+    const detail::ObstacleScratch<T> scratch{w.candidates.data(), w.near.data(),     candidate,
+                                             candidate + Np,      candidate + 2 * Np, candidate + 3 * Np};
+    return detail::obstacle_term<T>(grid, s.position, points, scalars.radius, scratch,
                                     {w.obstacle_x.data(), w.obstacle_y.data()});
   }
 
@@ -275,11 +281,16 @@ struct Projector<T>::Impl {
     if (settings.record_residual_history) result.residual_history(b, iteration) = residual;
   }
 
-  // Step 7: lambda -= rho_o P' sum_j r_o,j + rho_a Pdd' r_a + rho_v Pd' r_v + rho_r P' r_r, that is
-  // lambda += h with h = G' S.
+  // Step 7 for sample i: h = G' S, for lambda -= rho_o P' sum_j r_o,j + rho_a Pdd' r_a + rho_v Pd' r_v +
+  // rho_r P' r_r, that is lambda += h.
+  void correction_coefficients(Workspace& w, int i) const {
+    detail::basis_transpose_product<T>(G.data(), 3 * mp, n, w.Delta.col(0).data(), w.Delta.col(1).data(),
+                                       w.H.col(2 * i).data(), w.H.col(2 * i + 1).data());
+  }
+
+  // Step 7 for the block: lambda += h.
   void update_multiplier(Workspace& w) const {
     const int cols = 2 * w.block_count;
-    w.H.leftCols(cols).noalias() = G.transpose() * w.Delta.leftCols(cols);
     w.Lambda.leftCols(cols) += w.H.leftCols(cols);
   }
 
@@ -297,8 +308,8 @@ struct Projector<T>::Impl {
 
   void iterate_block(const Problem<T>& problem, Workspace& w, Result<T>& result) const {
     for (int iteration = 0; iteration < settings.iterations; ++iteration) {
-      evaluate_trajectories(w);                                        // step 1
       for (int i = 0; i < w.block_count; ++i) {
+        evaluate_trajectory(w, i);                                     // step 1
         const SampleArrays s = sample_arrays(w, i);
         ResidualSquares r;
         r.obstacle = update_obstacle_directions(problem, w, s);        // step 2
@@ -306,8 +317,9 @@ struct Projector<T>::Impl {
         r.acceleration = update_acceleration_directions(s);            // step 4
         r.tracking = update_tracking_directions(problem, w, s);        // step 5
         record_residual(r, s.b, iteration, result);                    // step 6
+        correction_coefficients(w, i);                                 // step 7: h = G' S
       }
-      update_multiplier(w);                                            // step 7
+      update_multiplier(w);                                            // step 7: lambda += h
       update_trajectory(w);                                            // steps 8 and 9
     }
     for (int i = 0; i < w.block_count; ++i) {
