@@ -99,29 +99,45 @@ std::string join(const std::vector<std::string>& items, const char* separator = 
   return out;
 }
 
-std::string scale_text(double scale) {
+std::string number_text(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, "%g", scale);
+  std::snprintf(text, sizeof text, "%g", value);
   return text;
 }
 
-/// The table header: every setting, and what was skipped or failed.
+/// The table header: every setting, and what was skipped or failed. The episode and safety settings are
+/// read from paper_episode_options (with the first row's planner), so that they are stated where they are set.
 std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
                                         const std::vector<std::string>& not_run) {
+  EpisodeCliOptions v2 = paper_episode_options(paper_planners().front(), 1.0);
+  const std::string latency = v2.latency;
+  v2.latency = "none";  // settings() leaves "auto" to resolve_episode_settings; the line below says it
+  const sim::EpisodeSettings episode = v2.settings();
+  const planners::PlannerOptions planner = v2.planner_settings(&episode);
   std::vector<std::string> lines = {
       "command: `occtrack bench paper --suites " + join(o.suites) + " --planners " + join(o.planners) +
           " --compute-scales " + join(scales) + (o.episodes > 0 ? " --episodes " + std::to_string(o.episodes) : "") +
           " --jobs " + std::to_string(o.jobs) + "`",
       o.episodes > 0 ? "episodes: the first " + std::to_string(o.episodes) + " of each suite only (a partial run)"
                      : "episodes: every episode of each suite",
-      "latency: auto: the planner's median cycle on scans replayed from the suite, measured once per planner, "
-      "compute scale and suite before its episodes (not while others run), times the compute scale; then held "
-      "fixed",
+      latency == "auto"
+          ? "latency: auto: the planner's median cycle on scans replayed from the suite, measured once per planner, "
+            "compute scale and suite before its episodes (not while others run), times the compute scale; then "
+            "held fixed"
+          : "latency: " + latency,
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
-      "robot response: first-order lag tau 0.25 s; every planner but follower-nolead knows it and leads its "
-      "command by it (response time 0.25 s, docs/protocol_v2.md)",
-      "LiDAR: 360 beams, Gaussian range noise sigma 0.01 m, range the scenario's",
-      "target estimate: Gaussian noise 0.05 m on position, 0.1 m/s on velocity; target_observation always",
+      "robot response: first-order lag tau " + number_text(episode.tau) + " s; every planner but follower-nolead knows it and leads "
+          "its command by it (response time " + number_text(planner.response_time) + " s, docs/protocol_v2.md)",
+      "LiDAR: " + (episode.beams ? std::to_string(*episode.beams) : std::string("the scenario's")) +
+          " beams, Gaussian range noise sigma " +
+          (episode.lidar_noise ? number_text(*episode.lidar_noise) + " m" : std::string("the scenario's")) +
+          ", range the scenario's",
+      "target estimate: Gaussian noise " + number_text(episode.target_position_noise) + " m on position, " +
+          number_text(episode.target_velocity_noise) + " m/s on velocity; target_observation " +
+          v2.target_observation,
+      std::string("safety layer: ") +
+          (planner.shield ? "on" : "off (the planners alone, as in the paper; docs/safety.md)") +
+          "; target predictor: " + (planner.predictor ? "on" : "off"),
       "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
           std::to_string(std::thread::hardware_concurrency()) + " hardware threads",
   };
@@ -161,8 +177,8 @@ int run(const PaperOptions& o) {
   std::vector<std::string> scales;
   for (const double s : o.compute_scales) {
     if (!(std::isfinite(s) && s > 0.0))
-      throw std::invalid_argument("--compute-scales: each must be a number > 0, got " + scale_text(s));
-    scales.push_back(scale_text(s));
+      throw std::invalid_argument("--compute-scales: each must be a number > 0, got " + number_text(s));
+    scales.push_back(number_text(s));
   }
   std::vector<const PaperPlanner*> planners;
   for (const auto& label : o.planners) {
@@ -199,9 +215,9 @@ int run(const PaperOptions& o) {
   for (const PaperPlanner* p : runnable)
     for (const double scale : o.compute_scales)
       for (const Suite& suite : suites) {
-        const std::string name = std::string(p->label) + " x" + scale_text(scale) + " " + suite.name;
+        const std::string name = std::string(p->label) + " x" + number_text(scale) + " " + suite.name;
         std::fprintf(stderr, "bench paper [%zu/%zu]: %s, compute scale %s, %s (%zu episodes)\n", ++started, total,
-                     p->label, scale_text(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
+                     p->label, number_text(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
         try {
           const EpisodeCliOptions episode = paper_episode_options(*p, scale);
           SuiteRunOptions run;

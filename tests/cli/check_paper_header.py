@@ -1,0 +1,32 @@
+"""Checks a `bench paper` output folder (tests/CMakeLists.txt, cli.bench_paper): each run's recorded settings,
+and that the tables' header states the settings the runs recorded (the header is generated from the same
+options, so the two cannot drift apart)."""
+import json
+import sys
+
+
+def check(condition, message):
+    if not condition:
+        sys.exit("check_paper_header: " + message)
+
+
+folder = sys.argv[1]
+expected_episodes = [int(n) for n in sys.argv[2].split(",")]
+d = json.load(open(folder + "/episodes.json"))
+check([len(r["result"]["episodes"]) for r in d["runs"]] == expected_episodes,
+      f"episodes per run: {[len(r['result']['episodes']) for r in d['runs']]}")
+header = "\n".join(d["settings"])
+tables = open(folder + "/tables.md").read()
+for run in d["runs"]:
+    p, e = run["settings"]["planner"], run["settings"]["episode"]
+    check(e["tau_s"] == 0.25 and p["shield"] is False, f"the v2 tables' settings, planners alone: {p} {e}")
+    for text in (f"first-order lag tau {e['tau_s']:g} s",
+                 f"response time {p['response_time_s']:g} s",
+                 f"LiDAR: {e['beams']} beams, Gaussian range noise sigma {e['lidar_noise_m']:g} m",
+                 f"Gaussian noise {e['target_position_noise_m']:g} m on position, "
+                 f"{e['target_velocity_noise_m_s']:g} m/s on velocity; target_observation {e['target_observation']}",
+                 "safety layer: " + ("on" if p["shield"] else "off"),
+                 "target predictor: " + ("on" if p["predictor"] else "off")):
+        check(text in header, f"the header does not say '{text}':\n{header}")
+        check(text in tables, f"tables.md does not say '{text}'")
+print("check_paper_header: the header states what every run recorded")
