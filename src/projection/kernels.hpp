@@ -128,7 +128,7 @@ struct ObstaclePoints {
 template <typename T>
 struct ObstacleScratch {
   int* candidates;  // points near a span of chunks, in index order
-  int* near;        // positions in `candidates` of the points near the chunk in hand
+  int* near;        // the points near the chunk in hand, in index order
   T* x;             // the candidates' x, y, vx, vy, padded with far-away points
   T* y;
   T* vx;
@@ -302,15 +302,20 @@ void basis_product(const T* G, int rows, int n, const T* cx, const T* cy, T* val
       const Packet bx = ei::pset1<Packet>(cx[k]), by = ei::pset1<Packet>(cy[k]);
       const Packet g0 = ei::ploadu<Packet>(g), g1 = ei::ploadu<Packet>(g + W);
       const Packet g2 = ei::ploadu<Packet>(g + 2 * W), g3 = ei::ploadu<Packet>(g + 3 * W);
-      x0 = ei::pmadd(g0, bx, x0), y0 = ei::pmadd(g0, by, y0);
-      x1 = ei::pmadd(g1, bx, x1), y1 = ei::pmadd(g1, by, y1);
-      x2 = ei::pmadd(g2, bx, x2), y2 = ei::pmadd(g2, by, y2);
-      x3 = ei::pmadd(g3, bx, x3), y3 = ei::pmadd(g3, by, y3);
+      x0 = ei::pmadd(g0, bx, x0);
+      x1 = ei::pmadd(g1, bx, x1);
+      x2 = ei::pmadd(g2, bx, x2);
+      x3 = ei::pmadd(g3, bx, x3);
+      y0 = ei::pmadd(g0, by, y0);
+      y1 = ei::pmadd(g1, by, y1);
+      y2 = ei::pmadd(g2, by, y2);
+      y3 = ei::pmadd(g3, by, y3);
     }
-    ei::pstoreu(value_x + r, x0), ei::pstoreu(value_x + r + W, x1);
-    ei::pstoreu(value_x + r + 2 * W, x2), ei::pstoreu(value_x + r + 3 * W, x3);
-    ei::pstoreu(value_y + r, y0), ei::pstoreu(value_y + r + W, y1);
-    ei::pstoreu(value_y + r + 2 * W, y2), ei::pstoreu(value_y + r + 3 * W, y3);
+    const Packet sums_x[4] = {x0, x1, x2, x3}, sums_y[4] = {y0, y1, y2, y3};
+    for (int c = 0; c < 4; ++c) {
+      ei::pstoreu(value_x + r + c * W, sums_x[c]);
+      ei::pstoreu(value_y + r + c * W, sums_y[c]);
+    }
   }
   for (; r < rows; r += W) {
     Packet x0 = ei::pset1<Packet>(T(0)), y0 = x0;
