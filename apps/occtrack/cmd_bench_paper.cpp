@@ -99,12 +99,6 @@ std::string join(const std::vector<std::string>& items, const char* separator = 
   return out;
 }
 
-std::string number_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
-  return text;
-}
-
 /// The table header: every setting, and what was skipped or failed. The episode and safety settings are
 /// read from paper_episode_options (with the first row's planner), so that they are stated where they are set.
 std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
@@ -126,14 +120,15 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
             "held fixed"
           : "latency: " + latency,
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
-      "robot response: first-order lag tau " + number_text(episode.tau) + " s; every planner but follower-nolead knows it and leads "
-          "its command by it (response time " + number_text(planner.response_time) + " s, docs/protocol_v2.md)",
+      "robot response: first-order lag tau " + episode_cli::show(episode.tau) +
+          " s; every planner but follower-nolead knows it and leads its command by it (response time " +
+          episode_cli::show(planner.response_time) + " s, docs/protocol_v2.md)",
       "LiDAR: " + (episode.beams ? std::to_string(*episode.beams) : std::string("the scenario's")) +
           " beams, Gaussian range noise sigma " +
-          (episode.lidar_noise ? number_text(*episode.lidar_noise) + " m" : std::string("the scenario's")) +
+          (episode.lidar_noise ? episode_cli::show(*episode.lidar_noise) + " m" : std::string("the scenario's")) +
           ", range the scenario's",
-      "target estimate: Gaussian noise " + number_text(episode.target_position_noise) + " m on position, " +
-          number_text(episode.target_velocity_noise) + " m/s on velocity; target_observation " +
+      "target estimate: Gaussian noise " + episode_cli::show(episode.target_position_noise) + " m on position, " +
+          episode_cli::show(episode.target_velocity_noise) + " m/s on velocity; target_observation " +
           v2.target_observation,
       std::string("safety layer: ") +
           (planner.shield ? "on" : "off (the planners alone, as in the paper; docs/safety.md)") +
@@ -177,8 +172,8 @@ int run(const PaperOptions& o) {
   std::vector<std::string> scales;
   for (const double s : o.compute_scales) {
     if (!(std::isfinite(s) && s > 0.0))
-      throw std::invalid_argument("--compute-scales: each must be a number > 0, got " + number_text(s));
-    scales.push_back(number_text(s));
+      throw std::invalid_argument("--compute-scales: each must be a number > 0, got " + episode_cli::show(s));
+    scales.push_back(episode_cli::show(s));
   }
   std::vector<const PaperPlanner*> planners;
   for (const auto& label : o.planners) {
@@ -215,9 +210,9 @@ int run(const PaperOptions& o) {
   for (const PaperPlanner* p : runnable)
     for (const double scale : o.compute_scales)
       for (const Suite& suite : suites) {
-        const std::string name = std::string(p->label) + " x" + number_text(scale) + " " + suite.name;
+        const std::string name = std::string(p->label) + " x" + episode_cli::show(scale) + " " + suite.name;
         std::fprintf(stderr, "bench paper [%zu/%zu]: %s, compute scale %s, %s (%zu episodes)\n", ++started, total,
-                     p->label, number_text(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
+                     p->label, episode_cli::show(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
         try {
           const EpisodeCliOptions episode = paper_episode_options(*p, scale);
           SuiteRunOptions run;
