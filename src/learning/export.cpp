@@ -22,7 +22,7 @@ std::string training_json(const TrainingRecord& r) {
   }
   nlohmann::json losses = {{"train", loss_json(r.final_loss)}};
   if (r.validation) losses["validation"] = loss_json(*r.validation);
-  const nlohmann::json j = {{"datasets", datasets},
+  nlohmann::json j = {{"datasets", datasets},
                             {"rows", rows},
                             {"dagger_rounds", dagger_rounds},
                             {"train_rows", r.train_rows},
@@ -41,6 +41,20 @@ std::string training_json(const TrainingRecord& r) {
                             {"hardware", r.hardware},
                             {"seconds", r.seconds},
                             {"final_losses", losses}};
+  if (r.initial_model) {
+    // The lineage: the initial model's own record, whole, and the rows and DAgger rounds of both trainings.
+    nlohmann::json parent = nlohmann::json::parse(r.initial_model->training, nullptr, /*allow_exceptions=*/false);
+    if (!parent.is_object()) parent = nlohmann::json::object();
+    auto count = [&](const char* with_initial, const char* own) {
+      const auto it = parent.contains(with_initial) ? parent.find(with_initial) : parent.find(own);
+      return it != parent.end() && it->is_number_integer() ? it->get<int64_t>() : int64_t{0};
+    };
+    j["rows_with_initial"] = rows + count("rows_with_initial", "rows");
+    j["dagger_rounds_with_initial"] = dagger_rounds + count("dagger_rounds_with_initial", "dagger_rounds");
+    j["initial_model"] = {{"path", r.initial_model->path},
+                          {"created_by", r.initial_model->created_by},
+                          {"training", parent}};
+  }
   return j.dump();
 }
 

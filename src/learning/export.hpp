@@ -38,6 +38,12 @@ struct TrainingRecord {
   double seconds = 0;
   LossTerms final_loss;
   std::optional<LossTerms> validation;
+  /// The model this training started from (TrainingSettings::initial_model), when it did not start from
+  /// random weights: its path, `created_by` and `training` JSON, kept whole so that the lineage is recorded.
+  struct Initial {
+    std::string path, created_by, training;
+  };
+  std::optional<Initial> initial_model;
 };
 
 struct ModelMetadata {

@@ -179,6 +179,7 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data, std::shared_ptr
   reseed(-1);  // the initial weights depend on the seed alone
   model_ = Cvae(settings_.network, settings_.dropout);
   model_->set_normalization(compute_normalization(data_, split_.train, settings_.network, settings_.band));
+  if (!settings_.initial_model.empty()) load_initial_model();
   model_->to(device_);
   optimizer_ = std::make_unique<torch::optim::Adam>(model_->parameters(),
                                                     torch::optim::AdamOptions(settings_.learning_rate));
@@ -203,6 +204,29 @@ Trainer::Trainer(const TrainingSettings& settings, Dataset data, std::shared_ptr
       return total;
     });
   }
+}
+
+void Trainer::load_initial_model() {
+  const std::string& path = settings_.initial_model;
+  const io::ModelFile file = io::read_model_file(path);
+  if (file.variant != settings_.variant)
+    throw std::invalid_argument("initial model " + path + ": it is a " + io::to_string(file.variant) +
+                                " model, and this training's variant is " + io::to_string(settings_.variant));
+  if (!(file.network == settings_.network))
+    throw std::invalid_argument("initial model " + path + ": its network " + file.network.to_json() +
+                                " differs from this training's " + settings_.network.to_json() +
+                                " (the sizes of the options and of the data, and the frame, must match)");
+  torch::NoGradGuard no_grad;
+  for (auto& [name, tensor] : named_model_tensors(*model_)) {
+    const std::vector<double> values = file.values(name);  // the file was checked: every tensor, its shape
+    tensor.copy_(torch::tensor(values, torch::kFloat64).view(tensor.sizes()).to(tensor.dtype()));
+  }
+  auto meta = [&](const char* key) {
+    const auto it = file.metadata.find(key);
+    return it == file.metadata.end() ? std::string() : it->second;
+  };
+  initial_created_by_ = meta("created_by");
+  initial_training_ = meta("training");
 }
 
 bool Trainer::distributed() const { return group_ && group_->size() > 1; }
@@ -458,6 +482,8 @@ ModelMetadata Trainer::model_metadata(const TrainingSummary& summary, const std:
   t.seconds = summary.seconds;
   t.final_loss = summary.final_loss;
   t.validation = summary.validation;
+  if (!settings_.initial_model.empty())
+    t.initial_model = TrainingRecord::Initial{settings_.initial_model, initial_created_by_, initial_training_};
   return m;
 }
 

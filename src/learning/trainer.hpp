@@ -62,6 +62,10 @@ struct TrainingSettings {
   int64_t validation_every = 1000;   ///< steps between validation losses (0: only at the end)
   int64_t validation_rows = 2048;    ///< at most this many validation rows are evaluated
   std::string checkpoint_path;       ///< empty: no checkpoints
+  /// A model file to start from (fine-tuning, for example one more DAgger round on a shipped model): its
+  /// weights and input normalisation replace the random weights and the data's normalisation. It must be of
+  /// the same variant and sizes (frame included). Empty: random weights.
+  std::string initial_model;
   int64_t checkpoint_every = 1000;   ///< steps between checkpoints (and one at the end)
   double progress_seconds = 5.0;     ///< seconds between progress reports
 
@@ -126,7 +130,10 @@ struct TrainingSummary {
 class Trainer {
  public:
   /// Builds the model (sizes from the data), the normalisation from the training rows and the optimizer.
-  /// Throws std::invalid_argument on unusable settings, std::runtime_error when CUDA is asked for and absent.
+  /// With settings.initial_model, the weights and normalisation are that file's instead (fine-tuning).
+  /// Throws std::invalid_argument on unusable settings (an initial model of another variant or other sizes
+  /// among them), io::InputError when the initial model cannot be read, std::runtime_error when CUDA is asked
+  /// for and absent.
   /// With a `group` of several processes (learning/distributed.hpp), each process computes its share of every
   /// batch and the gradients are summed: every process must pass the same settings and data (checked), and
   /// only rank 0 validates and writes checkpoints. Throws std::runtime_error when the processes differ.
@@ -166,6 +173,8 @@ class Trainer {
 
  private:
   void reseed(int64_t stream) const;
+  /// Copies settings_.initial_model's tensors into the model (after checking its variant and sizes).
+  void load_initial_model();
   /// Sums the gradients and the loss terms (each weighted by `weight`, this process's share) over the group.
   LossTerms sum_gradients(const LossTerms& share, double weight);
 
@@ -180,6 +189,7 @@ class Trainer {
   int64_t step_ = 0;
   double elapsed_seconds_ = 0;
   std::shared_ptr<ProcessGroup> group_;
+  std::string initial_created_by_, initial_training_;  ///< the initial model's provenance (metadata)
 };
 
 /// Sets torch's intra-op threads (threads <= 0: keeps torch's default) and, when torch runs more than one or

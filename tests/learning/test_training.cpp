@@ -482,6 +482,79 @@ TEST_F(Training, TimeLimitEndsTheRunAsAtItsLastStep) {
   EXPECT_NE(error.find("learning_rate_final"), std::string::npos) << error;
 }
 
+// Fine-tuning (--init): a training started from a model file begins with that model's weights and
+// normalisation (an export after 0 steps is the file, tensor for tensor), goes on from its loss rather than
+// from a random model's, records the lineage in the metadata, and refuses a model of another variant or size.
+TEST_F(Training, InitialModelIsWhereTheTrainingStarts) {
+  const std::string data = path("data.safetensors"), dagger = path("dagger.safetensors");
+  io::write_safetensors(data, dataset_file(64));
+  io::TensorFile driven = dataset_file(32, 32, 8, 5);  // other rows: the next DAgger round
+  driven.metadata["driver"] = "parent.safetensors";
+  io::write_safetensors(dagger, driven);
+  const std::string parent = path("parent.safetensors");
+  learning::TrainingSettings s = small_settings();
+  s.steps = 120;
+  learning::Trainer first(s, learning::load_dataset({data}));
+  const learning::TrainingSummary first_summary = first.run();
+  learning::export_model(parent, *first.model(), first.model_metadata(first_summary, "parent command"));
+
+  learning::TrainingSettings f = small_settings();
+  f.initial_model = parent;
+  f.steps = 0;
+  f.seed = 11;  // another seed: the weights must come from the file, not from the seed
+  learning::Trainer unchanged(f, learning::load_dataset({dagger}));
+  const learning::TrainingSummary none = unchanged.run();
+  const std::string copy = path("copy.safetensors");
+  learning::export_model(copy, *unchanged.model(), unchanged.model_metadata(none, "copy command"));
+  const io::ModelFile a = io::read_model_file(parent), b = io::read_model_file(copy);
+  ASSERT_EQ(a.tensors.size(), b.tensors.size());
+  for (const auto& [name, tensor] : a.tensors) EXPECT_EQ(a.values(name), b.values(name)) << name;
+
+  const auto training = nlohmann::json::parse(b.metadata.at("training"));
+  ASSERT_TRUE(training.contains("initial_model"));
+  EXPECT_EQ(training.at("initial_model").at("path"), parent);
+  EXPECT_EQ(training.at("initial_model").at("created_by"), "parent command");
+  EXPECT_EQ(training.at("initial_model").at("training").at("rows"), 64);
+  EXPECT_EQ(training.at("initial_model").at("training").at("steps"), 120);
+  EXPECT_EQ(training.at("rows"), 32);
+  EXPECT_EQ(training.at("rows_with_initial"), 96);
+  EXPECT_EQ(training.at("dagger_rounds"), 1);
+  EXPECT_EQ(training.at("dagger_rounds_with_initial"), 1);
+  EXPECT_FALSE(nlohmann::json::parse(a.metadata.at("training")).contains("initial_model"));
+
+  // Fine-tuning on the new rows starts where the parent left off, below a random model's start.
+  f.steps = 20;
+  learning::Trainer tuned(f, learning::load_dataset({dagger}));
+  learning::TrainingSettings r = f;
+  r.initial_model.clear();
+  learning::Trainer fresh(r, learning::load_dataset({dagger}));
+  const double tuned_start = mean_total(tuned.run().history, 0, 5);
+  const double fresh_start = mean_total(fresh.run().history, 0, 5);
+  EXPECT_LT(tuned_start, 0.7 * fresh_start) << "fine-tuned " << tuned_start << ", from random weights " << fresh_start;
+
+  auto refused = [&](const learning::TrainingSettings& settings, const std::string& word) {
+    try {
+      learning::Trainer t(settings, learning::load_dataset({dagger}));
+      ADD_FAILURE() << "accepted; expected an error naming " << word;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(parent), std::string::npos) << e.what();
+    }
+  };
+  learning::TrainingSettings wider = f;
+  wider.network.hidden = 48;
+  refused(wider, "network");
+  learning::TrainingSettings other_frame = f;
+  other_frame.network.target_frame = !f.network.target_frame;
+  refused(other_frame, "network");
+  learning::TrainingSettings bc = f;
+  bc.variant = io::Variant::bc;
+  refused(bc, "variant");
+  learning::TrainingSettings missing = f;
+  missing.initial_model = path("no-such-model.safetensors");
+  EXPECT_THROW(learning::Trainer(missing, learning::load_dataset({dagger})), io::InputError);
+}
+
 namespace {
 
 // Batch norm over the processes' rows (normalize_batch with a BatchSum, as data-parallel training uses it):

@@ -1,7 +1,7 @@
 // occtrack train --data FILE [--data FILE ...] --out MODEL.safetensors [--variant cvae|bc|fixed-q]
 //                [--steps N] [--batch B] [--lr LR] [--beta BETA] [--iterations K] [--device cpu|cuda]
 //                [--threads T] [--seed S] [--checkpoint FILE] [--checkpoint-every N] [--resume FILE]
-//                [--snapshot-every N]
+//                [--snapshot-every N] [--init MODEL.safetensors]
 //                [--hidden H] [--layers L] [--features F] [--pointnet-hidden HP] [--pointnet-widths W,...]
 //                [--latent Z] [--dropout P] [--validation-share S] [--validation-every N] [--plain-projection]
 //                [--loss-log FILE.csv] [--world-size W --rank R --rendezvous FILE|HOST:PORT]
@@ -91,6 +91,8 @@ std::string canonical_command(const TrainOptions& o) {
   c << " --latent " << s.network.latent << " --dropout " << s.dropout << " --frame " << o.frame;
   if (s.learning_rate_final >= 0) c << " --lr-final " << s.learning_rate_final;
   if (s.max_seconds > 0) c << " --max-minutes " << s.max_seconds / 60.0;
+  if (s.kl_warmup_steps != learning::TrainingSettings{}.kl_warmup_steps) c << " --kl-warmup " << s.kl_warmup_steps;
+  if (!s.initial_model.empty()) c << " --init " << s.initial_model;
   if (s.plain_projection) c << " --plain-projection";
   if (o.distributed.world_size > 1) c << " --world-size " << o.distributed.world_size;
   if (!o.resume.empty()) c << " --resume " << o.resume;
@@ -265,6 +267,11 @@ void add_train_command(CLI::App& app, int& exit_code) {
                   "Also write the model every this many steps, as OUT with .stepN before the extension, for "
                   "choosing one in closed loop (scripts/validate_models.sh; 0: none)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--init", s.initial_model,
+                  "Start from this model file's weights and input normalisation instead of random weights "
+                  "(fine-tuning, e.g. one more DAgger round on a shipped model; same variant, sizes and frame); "
+                  "the new model's metadata records it under training.initial_model")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--resume", o->resume,
                   "Continue from this checkpoint (same data, variant, sizes, batch, seed and K); new checkpoints "
                   "go to --checkpoint, or to this file");
