@@ -45,6 +45,7 @@ Ranking::Ranking(const RankingSettings& settings, const projection::Settings& pr
   targets_.resize(m, 2);
   for (Eigen::VectorXd* v : {&cx_, &cy_}) v->resize(n);
   for (Eigen::VectorXd* v : {&px_, &py_, &vx_, &vy_, &ax_, &ay_}) v->resize(m);
+  collision_columns_.resize(std::max(projection.obstacles, 1), 4);
   occlusion_weights_.resize(projection.steps);
   for (int k = 0; k < projection.steps; ++k) {
     const double s = basis_.times(k) / projection.horizon;
@@ -116,6 +117,10 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
   double tracking = 0, smoothness = 0, violation = 0, tracking_weights = 0;
   const double a = projection_.obstacle_radius;
   const Eigen::Index N = collision_points.rows();
+  if (collision_columns_.rows() < N) collision_columns_.resize(N, 4);  // more points than the optimizer's N
+  collision_columns_.topRows(N) = collision_points;
+  const auto px0 = collision_columns_.col(0).head(N).array(), py0 = collision_columns_.col(1).head(N).array();
+  const auto pvx = collision_columns_.col(2).head(N).array(), pvy = collision_columns_.col(3).head(N).array();
   for (int k = 0; k < m; ++k) {
     const double t = basis_.times(k);
     const double distance = (positions.row(k) - targets.row(k)).norm();
@@ -123,13 +128,12 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
     tracking += w * (distance - settings_.band.reference) * (distance - settings_.band.reference);
     tracking_weights += w;
     smoothness += ax(k) * ax(k) + ay(k) * ay(k);
-    // Deepest penetration of an obstacle disk at this step: one square root per step, not per point.
-    double nearest2 = INFINITY;
-    for (Eigen::Index j = 0; j < N; ++j) {
-      const double dx = positions(k, 0) - (collision_points(j, 0) + collision_points(j, 2) * t);
-      const double dy = positions(k, 1) - (collision_points(j, 1) + collision_points(j, 3) * t);
-      nearest2 = std::min(nearest2, dx * dx + dy * dy);
-    }
+    // Deepest penetration of an obstacle disk at this step: one square root per step, not per point. A
+    // point with a NaN coordinate is passed over (PropagateNumbers), as a scalar std::min would.
+    const double nearest2 =
+        N > 0 ? ((positions(k, 0) - (px0 + pvx * t)).square() + (positions(k, 1) - (py0 + pvy * t)).square())
+                    .minCoeff<Eigen::PropagateNumbers>()
+              : INFINITY;
     const double penetration = N > 0 ? a - std::sqrt(nearest2) : 0.0;
     if (N > 0 && t <= settings_.near_horizon)
       terms.near = std::max(terms.near, settings_.near_clearance - std::sqrt(nearest2));

@@ -95,6 +95,9 @@ class Ranking {
   // Workspaces of evaluate(), m rows each.
   mutable Eigen::MatrixX2d positions_, targets_;
   mutable Eigen::VectorXd cx_, cy_, px_, py_, vx_, vy_, ax_, ay_;
+  /// The collision points column by column (x, y, vx, vy; projection.obstacles rows reserved), so that the
+  /// nearest-point search runs in SIMD lanes.
+  mutable Eigen::Matrix<double, Eigen::Dynamic, 4> collision_columns_;
 };
 
 }  // namespace occtrack::planners
