@@ -46,6 +46,7 @@ Ranking::Ranking(const RankingSettings& settings, const projection::Settings& pr
   for (Eigen::VectorXd* v : {&cx_, &cy_}) v->resize(n);
   for (Eigen::VectorXd* v : {&px_, &py_, &vx_, &vy_, &ax_, &ay_}) v->resize(m);
   collision_columns_.resize(std::max(projection.obstacles, 1), 4);
+  occluder_candidates_.reserve(512);
   occlusion_weights_.resize(projection.steps);
   for (int k = 0; k < projection.steps; ++k) {
     const double s = basis_.times(k) / projection.horizon;
@@ -113,7 +114,8 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
   RankingTerms terms;
   terms.occlusion = occlusion::occlusion_cost(positions, targets, basis_.times, occlusion_points,
                                               forecasting ? forecast->weights : occlusion_weights_,
-                                              settings_.occlusion_stride, settings_.occlusion_margin);
+                                              settings_.occlusion_stride, settings_.occlusion_margin,
+                                              &occluder_candidates_);
   double tracking = 0, smoothness = 0, violation = 0, tracking_weights = 0;
   const double a = projection_.obstacle_radius;
   const Eigen::Index N = collision_points.rows();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 namespace occtrack::occlusion {
 
@@ -13,9 +14,15 @@ namespace occtrack::occlusion {
 /// ignored: a scan often sees the target, and it cannot occlude itself. The distance is
 /// core::point_segment_distance's, computed inline with the segment's terms hoisted out of the loop over points.
 /// Throws std::invalid_argument when stride < 1 (the steps would never advance).
+///
+/// The points are tested in two rounds: once per span of kSpanSteps checked steps against the box of the
+/// span's lines of sight, then only those that pass, at each step. The sum is the same, term for term and in
+/// the same order, as testing every point at every step. `scratch` holds the candidates of a span; give one
+/// whose capacity covers the points, and the call allocates nothing (null: a local one).
+inline constexpr int kSpanSteps = 4;
 double occlusion_cost(const Eigen::Ref<const Eigen::MatrixX2d>& positions,
                       const Eigen::Ref<const Eigen::MatrixX2d>& targets, const Eigen::VectorXd& times,
                       const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>& points,
-                      const Eigen::VectorXd& weights, int stride, double margin);
+                      const Eigen::VectorXd& weights, int stride, double margin, std::vector<int>* scratch = nullptr);
 
 }  // namespace occtrack::occlusion

@@ -98,6 +98,8 @@ class Ranking {
   /// The collision points column by column (x, y, vx, vy; projection.obstacles rows reserved), so that the
   /// nearest-point search runs in SIMD lanes.
   mutable Eigen::Matrix<double, Eigen::Dynamic, 4> collision_columns_;
+  /// occlusion::occlusion_cost's candidates (grows to the largest cloud seen, then allocates no more).
+  mutable std::vector<int> occluder_candidates_;
 };
 
 }  // namespace occtrack::planners
