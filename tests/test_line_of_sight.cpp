@@ -89,7 +89,8 @@ TEST(LineOfSight, TwoRoundsCountEveryPointThatCanCount) {
       const occtrack::core::Vec2 a(l.positions(k, 0), l.positions(k, 1)), b(l.targets(k, 0), l.targets(k, 1));
       double step_cost = 0.0;
       for (int j = 0; j < count; ++j) {
-        const occtrack::core::Vec2 q(points(j, 0) + points(j, 2) * l.times(k), points(j, 1) + points(j, 3) * l.times(k));
+        const double t = l.times(k);
+        const occtrack::core::Vec2 q(points(j, 0) + points(j, 2) * t, points(j, 1) + points(j, 3) * t);
         if ((q - b).norm() < margin) continue;
         const double d = occtrack::core::point_segment_distance(q, a, b);
         if (d < margin) step_cost += (margin - d) * (margin - d);

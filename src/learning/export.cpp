@@ -23,24 +23,24 @@ std::string training_json(const TrainingRecord& r) {
   nlohmann::json losses = {{"train", loss_json(r.final_loss)}};
   if (r.validation) losses["validation"] = loss_json(*r.validation);
   nlohmann::json j = {{"datasets", datasets},
-                            {"rows", rows},
-                            {"dagger_rounds", dagger_rounds},
-                            {"train_rows", r.train_rows},
-                            {"validation_rows", r.validation_rows},
-                            {"seed", r.seed},
-                            {"steps", r.steps},
-                            {"batch", r.batch},
-                            {"learning_rate", r.learning_rate},
-                            {"learning_rate_final", r.learning_rate_final},
-                            {"beta", r.beta},
-                            {"kl_warmup_steps", r.kl_warmup_steps},
-                            {"dropout", r.dropout},
-                            {"iterations", r.iterations},
-                            {"projection_backward", r.plain_projection ? "plain" : "fast"},
-                            {"device", r.device},
-                            {"hardware", r.hardware},
-                            {"seconds", r.seconds},
-                            {"final_losses", losses}};
+                      {"rows", rows},
+                      {"dagger_rounds", dagger_rounds},
+                      {"train_rows", r.train_rows},
+                      {"validation_rows", r.validation_rows},
+                      {"seed", r.seed},
+                      {"steps", r.steps},
+                      {"batch", r.batch},
+                      {"learning_rate", r.learning_rate},
+                      {"learning_rate_final", r.learning_rate_final},
+                      {"beta", r.beta},
+                      {"kl_warmup_steps", r.kl_warmup_steps},
+                      {"dropout", r.dropout},
+                      {"iterations", r.iterations},
+                      {"projection_backward", r.plain_projection ? "plain" : "fast"},
+                      {"device", r.device},
+                      {"hardware", r.hardware},
+                      {"seconds", r.seconds},
+                      {"final_losses", losses}};
   if (r.initial_model) {
     // The lineage: the initial model's own record, whole, and the rows and DAgger rounds of both trainings.
     nlohmann::json parent = nlohmann::json::parse(r.initial_model->training, nullptr, /*allow_exceptions=*/false);

@@ -62,12 +62,12 @@ struct TrainingSettings {
   int64_t validation_every = 1000;   ///< steps between validation losses (0: only at the end)
   int64_t validation_rows = 2048;    ///< at most this many validation rows are evaluated
   std::string checkpoint_path;       ///< empty: no checkpoints
+  int64_t checkpoint_every = 1000;   ///< steps between checkpoints (and one at the end)
+  double progress_seconds = 5.0;     ///< seconds between progress reports
   /// A model file to start from (fine-tuning, for example one more DAgger round on a shipped model): its
   /// weights and input normalisation replace the random weights and the data's normalisation. It must be of
   /// the same variant and sizes (frame included). Empty: random weights.
   std::string initial_model;
-  int64_t checkpoint_every = 1000;   ///< steps between checkpoints (and one at the end)
-  double progress_seconds = 5.0;     ///< seconds between progress reports
 
   /// False, with *error naming the first broken field, otherwise true.
   bool validate(std::string* error = nullptr) const;

@@ -32,7 +32,8 @@ double occlusion_cost(const Eigen::Ref<const Eigen::MatrixX2d>& positions,
       y_lo = std::min({y_lo, positions(last, 1), targets(last, 1)});
       y_hi = std::max({y_hi, positions(last, 1), targets(last, 1)});
     }
-    const double grow = margin + 1e-9 * (1.0 + std::max({std::abs(x_lo), std::abs(x_hi), std::abs(y_lo), std::abs(y_hi)}));
+    const double extent = std::max({std::abs(x_lo), std::abs(x_hi), std::abs(y_lo), std::abs(y_hi)});
+    const double grow = margin + 1e-9 * (1.0 + extent);
     x_lo -= grow;
     x_hi += grow;
     y_lo -= grow;
