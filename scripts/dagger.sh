@@ -18,6 +18,8 @@
 #   EPISODES      episodes per round [32]; DURATION0, DURATION: their simulated seconds [40, 30]
 #   JOBS          labelling threads [all cores]
 #   ROUND_STEPS   training steps of each round's cvae [1200]
+#   DRIVER_TRACKING_WEIGHT   the driving cvae's ranking weight on the tracking distance [1: as the shipped
+#                 models' rounds were driven, before the planner's default became 5]
 #   VARIANTS      the final models, side by side: any of cvae bc fixed-q [cvae]
 #   STEPS, BC_STEPS, BATCH, MAX_MINUTES, THREADS, SNAPSHOT_EVERY   the final training (scripts/train_models.sh)
 #                 [2000, 8000, 256, none, all cores, 250]
@@ -62,7 +64,8 @@ generate "$data/demo-r0.safetensors" --seed 20000 --episodes "$episodes" --durat
 for (( r = 1; r <= rounds; r++ )); do
   train_round $(( r - 1 ))
   generate "$data/demo-r$r.safetensors" --seed $(( 20000 + 1000 * r )) --episodes "$episodes" \
-    --duration "${DURATION:-30}" --driver cvae --model "$data/cvae-r$(( r - 1 )).safetensors"
+    --duration "${DURATION:-30}" --driver cvae --model "$data/cvae-r$(( r - 1 )).safetensors" \
+    --tracking-weight "${DRIVER_TRACKING_WEIGHT:-1}"
 done
 echo "dagger.sh: data done after $(( ($(date +%s) - start) / 60 )) min" >&2
 

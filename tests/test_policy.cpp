@@ -714,6 +714,48 @@ TEST(PolicyModel, TheFactoryRunsTheProjectionForTheIterationsAsked) {
   EXPECT_TRUE(differs_from_default) << "K = 20 and K = 50 gave the same plans";
 }
 
+TEST(PolicyModel, TheFactoryRanksWithTheVariantsTrackingWeight) {
+  // make_planner gives cvae and bc the tracking weight chosen in closed loop (5), fixed-q and the other
+  // planners the ranking's 1, and PlannerOptions::tracking_weight (--tracking-weight) replaces either.
+  planners::PlannerOptions options;
+  EXPECT_EQ(planners::tracking_weight_for("cvae", options), 5.0);
+  EXPECT_EQ(planners::tracking_weight_for("bc", options), 5.0);
+  EXPECT_EQ(planners::tracking_weight_for("cvae-fixed-q", options), 1.0);
+  EXPECT_EQ(planners::tracking_weight_for("projcem", options), planners::RankingSettings{}.tracking_weight);
+  EXPECT_EQ(planners::tracking_weight_for("follower", options), planners::RankingSettings{}.tracking_weight);
+  options.tracking_weight = 2.5;
+  for (const char* name : {"cvae", "bc", "cvae-fixed-q", "projcem", "follower"})
+    EXPECT_EQ(planners::tracking_weight_for(name, options), 2.5) << name;
+
+  // The weight reaches the ranking: a cvae built by name plans and costs exactly as one built from settings
+  // weighted 5, and its costs are not those of the ranking's default weight.
+  const std::string path = test::temp_path("tracking-weight.safetensors");
+  io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", 4));
+  planners::PlannerOptions by_name_options;
+  by_name_options.model = path;
+  by_name_options.batch = 5;
+  auto by_name = planners::make_planner("cvae", by_name_options);
+  auto settings = policy_settings(policy::Variant::cvae, 5);
+  settings.ranking.tracking_weight = planners::learned_tracking_weight(policy::Variant::cvae);
+  planners::LearnedPolicy weighted(settings, policy::Model::load(path));
+  settings.ranking.tracking_weight = planners::RankingSettings{}.tracking_weight;
+  planners::LearnedPolicy unweighted(settings, policy::Model::load(path));
+  std::filesystem::remove(path);
+
+  bool cost_differs = false;
+  for (const auto& in : forest_drive(3).inputs) {
+    const planners::PlannerOutput a = by_name->plan(in);
+    const planners::PlannerOutput b = weighted.plan(in);
+    const planners::PlannerOutput c = unweighted.plan(in);
+    ASSERT_TRUE(a.ok && b.ok && c.ok) << a.message << b.message << c.message;
+    ASSERT_EQ(a.plan.size(), b.plan.size());
+    for (std::size_t k = 0; k < a.plan.size(); ++k) EXPECT_EQ(a.plan[k], b.plan[k]) << "step " << k;
+    EXPECT_EQ(by_name->last_record().terms.total, weighted.last_record().terms.total);
+    cost_differs = cost_differs || by_name->last_record().terms.total != unweighted.last_record().terms.total;
+  }
+  EXPECT_TRUE(cost_differs) << "weights 5 and 1 ranked every cycle at the same cost";
+}
+
 // ------------------------------------------------------------------------------------------------------------
 // The planner.
 

@@ -87,6 +87,8 @@ std::string canonical_command(const GenerateOptions& o) {
                      join(o.worlds) + " --speeds " + speeds_text(o) + " --label-every " +
                      std::to_string(o.label_every) + " --driver " + o.driver;
   if (!o.model.empty()) text += " --model " + o.model;
+  if (o.driver != "expert")
+    text += " --tracking-weight " + number_text(planners::tracking_weight_for(o.driver, o.episode.planner_options));
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
   const EpisodeCliOptions& e = o.episode;
@@ -346,6 +348,11 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
                       ") while the expert labels (DAgger with a learned planner and --model)")
       ->capture_default_str();
   gen->add_option("--model", o->model, "Model file of a learned --driver");
+  gen->add_option("--tracking-weight", o->episode.planner_options.tracking_weight,
+                  "The driver's ranking weight on the distance to the target (0: the planner's default, 5 for cvae "
+                  "and bc; the shipped models' DAgger rounds were driven at 1)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
   gen->add_option("--jobs", o->jobs,
                   "Episodes run at the same time (default: every hardware thread; under MPI, per rank, the "
                   "machine's hardware threads shared among its ranks, at most the CPUs the rank is bound to)");

@@ -231,6 +231,11 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                       "; the shipped models were trained through 20)")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
+  cmd->add_option("--tracking-weight", o.planner_options.tracking_weight,
+                  "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, "
+                  "1 otherwise; docs/learning.md, \"The ranking's tracking weight\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1e6); }, "W in [0, 1e6]"))
+      ->capture_default_str();
   cmd->add_option("--waypoints", o.planner_options.waypoints,
                   "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))

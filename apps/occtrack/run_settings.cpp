@@ -34,6 +34,7 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"model", p.model.empty() ? nlohmann::json(nullptr) : nlohmann::json(p.model)},
                   {"batch", p.batch},
                   {"iterations", p.iterations},
+                  {"tracking_weight", planners::tracking_weight_for(planner, p)},
                   {"keep_last_plan", p.keep_last_plan},
                   {"rank_stop", p.rank_stop},
                   {"samples", p.samples},
@@ -70,7 +71,8 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
                               const sim::EpisodeSettings& e) {
   std::ostringstream s;
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
-    << ", predictor " << (p.predictor ? "on" : "off") << ", latency ";
+    << ", predictor " << (p.predictor ? "on" : "off") << ", tracking weight " << planners::tracking_weight_for(planner, p)
+    << ", latency ";
   if (e.latency_ms)
     s << *e.latency_ms << " ms";
   else

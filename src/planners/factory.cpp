@@ -13,6 +13,13 @@ std::vector<std::string> planner_names() {
   return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q", "autochaser"};
 }
 
+double tracking_weight_for(const std::string& name, const PlannerOptions& options) {
+  if (options.tracking_weight > 0) return options.tracking_weight;
+  for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q})
+    if (name == learned_planner_name(variant)) return learned_tracking_weight(variant);
+  return RankingSettings{}.tracking_weight;
+}
+
 namespace {
 
 std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {
@@ -25,12 +32,14 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.response_time = options.response_time;
     s.projection.threads = std::max(1, options.threads);
     s.ranking.predict_target = options.predictor;
+    s.ranking.tracking_weight = tracking_weight_for(name, options);
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") {
     FollowerSettings s;
     s.response_time = options.response_time;
     s.ranking.predict_target = options.predictor;
+    s.ranking.tracking_weight = tracking_weight_for(name, options);
     return std::make_unique<Follower>(s);
   }
   if (name == "autochaser") {
@@ -51,6 +60,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.seed = options.seed;
     s.response_time = options.response_time;
     s.ranking.predict_target = options.predictor;
+    s.ranking.tracking_weight = tracking_weight_for(name, options);
     return std::make_unique<LearnedPolicy>(s);
   }
   std::string known;

@@ -67,6 +67,12 @@ std::string default_model_path(policy::Variant variant) {
   return std::string(OCCTRACK_MODEL_DIR) + "/" + policy::to_string(variant) + ".safetensors";
 }
 
+double learned_tracking_weight(policy::Variant variant) {
+  // fixed-q's nominal d_max already holds its plans inside the band; weighted 5 it hid the target longer on
+  // the validation episodes, cvae and bc shorter.
+  return variant == policy::Variant::fixed_q ? RankingSettings{}.tracking_weight : 5.0;
+}
+
 struct LearnedPolicy::Impl {
   LearnedPolicySettings settings;
   policy::Model model;

@@ -55,6 +55,11 @@ struct LearnedPolicySettings {
 std::string learned_planner_name(policy::Variant variant);
 /// The shipped model of a variant: OCCTRACK_MODEL_DIR/{cvae,bc,fixed-q}.safetensors.
 std::string default_model_path(policy::Variant variant);
+/// The ranking's tracking weight a variant runs with when built by name (make_planner): 5 for cvae and bc,
+/// the ranking's default of 1 for fixed-q. Chosen in closed loop on validation episodes outside the benchmark
+/// seeds (docs/learning.md, "The ranking's tracking weight"). LearnedPolicySettings' own default stays the
+/// ranking's, so that a policy built from settings ranks by the spec's cost unless told otherwise.
+double learned_tracking_weight(policy::Variant variant);
 
 class LearnedPolicy final : public Planner {
  public:

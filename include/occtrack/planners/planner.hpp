@@ -139,6 +139,10 @@ struct PlannerOptions {
   /// Learned planners that project (cvae, cvae-fixed-q): projection iterations per cycle (0: the planner's
   /// default of 50, LearnedPolicySettings::projection). The shipped models were trained through K = 20.
   int iterations = 0;
+  /// The ranking's weight on the tracking distance (RankingSettings::tracking_weight) for the planners that
+  /// rank plans (Proj-CEM, the follower, the learned planners). 0: the planner's default, which is the
+  /// ranking's 1 except for the learned planners (learned_tracking_weight).
+  double tracking_weight = 0.0;
   /// s, the robot's velocity time constant: commands lead the plan by it (Protocol v2's tau; 0: v1).
   double response_time = 0.0;
   int waypoints = 0;  ///< AutoChaser: true future target points given as prior (0: constant-velocity prediction)
@@ -155,6 +159,10 @@ struct PlannerOptions {
 
 /// Names the command line accepts, e.g. "projcem", "follower".
 std::vector<std::string> planner_names();
+/// The ranking's tracking weight the planner `name` gets from make_planner: options.tracking_weight when
+/// positive, else the planner's default (learned_tracking_weight for the learned planners, the ranking's 1
+/// for the others; AutoChaser ranks nothing and ignores it).
+double tracking_weight_for(const std::string& name, const PlannerOptions& options);
 /// Builds a planner by name; throws std::invalid_argument listing the known names otherwise.
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options = {});
 
