@@ -348,11 +348,7 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
                       ") while the expert labels (DAgger with a learned planner and --model)")
       ->capture_default_str();
   gen->add_option("--model", o->model, "Model file of a learned --driver");
-  gen->add_option("--tracking-weight", o->episode.planner_options.tracking_weight,
-                  "The driver's ranking weight on the distance to the target (0: the planner's default, 5 for cvae "
-                  "and bc; the shipped models' DAgger rounds were driven at 1)")
-      ->check(CLI::Range(0.0, 1e6))
-      ->capture_default_str();
+  add_tracking_weight_option(gen, o->episode.planner_options.tracking_weight);  // the driver's (dagger.sh: 1)
   gen->add_option("--jobs", o->jobs,
                   "Episodes run at the same time (default: every hardware thread; under MPI, per rank, the "
                   "machine's hardware threads shared among its ranks, at most the CPUs the rank is bound to)");

@@ -207,6 +207,17 @@ inline void add_protocol_options(CLI::App* cmd, EpisodeCliOptions& o) {
                     {"always", "line_of_sight"});
 }
 
+/// --tracking-weight W (planners::PlannerOptions::tracking_weight), for `run`, `bench suite` and the driver of
+/// `dataset generate`.
+inline void add_tracking_weight_option(CLI::App* cmd, double& weight) {
+  namespace e = episode_cli;
+  cmd->add_option("--tracking-weight", weight,
+                  "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, "
+                  "1 otherwise; docs/learning.md, \"The ranking's tracking weight\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1e6); }, "W in [0, 1e6]"))
+      ->capture_default_str();
+}
+
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   namespace e = episode_cli;
   std::string names;
@@ -231,11 +242,7 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                       "; the shipped models were trained through 20)")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
-  cmd->add_option("--tracking-weight", o.planner_options.tracking_weight,
-                  "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, "
-                  "1 otherwise; docs/learning.md, \"The ranking's tracking weight\")")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1e6); }, "W in [0, 1e6]"))
-      ->capture_default_str();
+  add_tracking_weight_option(cmd, o.planner_options.tracking_weight);
   cmd->add_option("--waypoints", o.planner_options.waypoints,
                   "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))

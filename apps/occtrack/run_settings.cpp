@@ -71,8 +71,8 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
                               const sim::EpisodeSettings& e) {
   std::ostringstream s;
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
-    << ", predictor " << (p.predictor ? "on" : "off") << ", tracking weight " << planners::tracking_weight_for(planner, p)
-    << ", latency ";
+    << ", predictor " << (p.predictor ? "on" : "off")
+    << ", tracking weight " << planners::tracking_weight_for(planner, p) << ", latency ";
   if (e.latency_ms)
     s << *e.latency_ms << " ms";
   else
