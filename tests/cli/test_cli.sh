@@ -288,6 +288,8 @@ expect_bad_option --target-noise 0.1 "must be POS,VEL"
 expect_bad_option --target-noise 0.1,nan "must be POS,VEL"
 expect_bad_option --target-observation sometimes "sometimes"
 expect_bad_option --waypoints -1 "must be an integer >= 0, got -1"
+expect_bad_option --tracking-weight -1 "must be in [0, 1e+06], got -1"
+expect_bad_option --tracking-weight nan "must be in [0, 1e+06], got nan"
 
 run_tool run "$scenario_file" --planner follower --latency auto --compute-scale 10 --tau 0.25 --beams 360 \
   --lidar-noise 0.01 --beam-dropout 0.1 --target-noise 0.05,0.1 --target-observation line_of_sight \
@@ -317,6 +319,16 @@ if [ "$rc" -eq 0 ] && json_check "$tmp/episode_bare.json" '"shield" not in d'; t
   pass "run --no-shield runs the planner alone"
 else
   fail "run --no-shield runs the planner alone" "$(tail_of "$tmp/err")"
+fi
+
+# The ranking's tracking weight: the planner's default (1 for the follower), or --tracking-weight, recorded.
+run_tool run "$scenario_file" --planner follower --tracking-weight 2.5 --json "$tmp/episode_weighted.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_weighted.json" 'd["settings"]["planner"]["tracking_weight"] == 2.5' \
+   && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["tracking_weight"] == 1' \
+   && contains "$tmp/out" "tracking weight 2.5"; then
+  pass "run records the tracking weight: the follower's 1, or --tracking-weight's"
+else
+  fail "run records the tracking weight" "$(tail_of "$tmp/err")"
 fi
 
 finish
