@@ -682,20 +682,31 @@ TEST(PolicyModel, LoadsFromAFileAndExplainsAMissingOne) {
       << planners::default_model_path(policy::Variant::fixed_q);
 }
 
+namespace {
+
+/// Writes a random cvae model (seed) to path and returns options that build it by name at B = 5.
+planners::PlannerOptions random_cvae_options(const std::string& path, std::uint64_t seed) {
+  io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", seed));
+  planners::PlannerOptions options;
+  options.model = path;
+  options.batch = 5;
+  return options;
+}
+
+}  // namespace
+
 TEST(PolicyModel, TheFactoryRunsTheProjectionForTheIterationsAsked) {
   // PlannerOptions::iterations (the command line's --iterations) reaches the projection: a cvae built by name
   // with K = 20 plans exactly as one built with LearnedPolicySettings' projection at 20, and unlike the
   // default of 50.
   const std::string path = test::temp_path("iterations.safetensors");
-  io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", 3));
-  planners::PlannerOptions options;
-  options.model = path;
-  options.batch = 5;
+  planners::PlannerOptions options = random_cvae_options(path, 3);
   auto by_default = planners::make_planner("cvae", options);
   options.iterations = 20;
   auto by_name = planners::make_planner("cvae", options);
   auto settings = policy_settings(policy::Variant::cvae, 5);
   settings.projection.iterations = 20;
+  settings.ranking.tracking_weight = planners::learned_tracking_weight(policy::Variant::cvae);  // as by name
   planners::LearnedPolicy direct(settings, policy::Model::load(path));
   std::filesystem::remove(path);
 
@@ -730,11 +741,7 @@ TEST(PolicyModel, TheFactoryRanksWithTheVariantsTrackingWeight) {
   // The weight reaches the ranking: a cvae built by name plans and costs exactly as one built from settings
   // weighted 5, and its costs are not those of the ranking's default weight.
   const std::string path = test::temp_path("tracking-weight.safetensors");
-  io::write_safetensors(path, policy::random_model(default_network(), default_projection(), "cvae", 4));
-  planners::PlannerOptions by_name_options;
-  by_name_options.model = path;
-  by_name_options.batch = 5;
-  auto by_name = planners::make_planner("cvae", by_name_options);
+  auto by_name = planners::make_planner("cvae", random_cvae_options(path, 4));
   auto settings = policy_settings(policy::Variant::cvae, 5);
   settings.ranking.tracking_weight = planners::learned_tracking_weight(policy::Variant::cvae);
   planners::LearnedPolicy weighted(settings, policy::Model::load(path));
