@@ -1,3 +1,4 @@
+#include <optional>
 #include <stdexcept>
 
 #include "occtrack/planners/autochaser.hpp"
@@ -13,10 +14,20 @@ std::vector<std::string> planner_names() {
   return {"projcem", "projcem-expert", "follower", "cvae", "bc", "cvae-fixed-q", "autochaser"};
 }
 
+namespace {
+
+/// The learned variant a planner name stands for ("cvae", "bc", "cvae-fixed-q"); none for the other planners.
+std::optional<policy::Variant> learned_variant(const std::string& name) {
+  for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q})
+    if (name == learned_planner_name(variant)) return variant;
+  return std::nullopt;
+}
+
+}  // namespace
+
 double tracking_weight_for(const std::string& name, const PlannerOptions& options) {
   if (options.tracking_weight > 0) return options.tracking_weight;
-  for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q})
-    if (name == learned_planner_name(variant)) return learned_tracking_weight(variant);
+  if (const auto variant = learned_variant(name)) return learned_tracking_weight(*variant);
   return RankingSettings{}.tracking_weight;
 }
 
@@ -48,10 +59,9 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.response_time = options.response_time;
     return std::make_unique<AutoChaser>(s);
   }
-  for (const policy::Variant variant : {policy::Variant::cvae, policy::Variant::bc, policy::Variant::fixed_q}) {
-    if (name != learned_planner_name(variant)) continue;
+  if (const auto variant = learned_variant(name)) {
     LearnedPolicySettings s;
-    s.variant = variant;
+    s.variant = *variant;
     s.model_path = options.model;  // empty: the shipped model of the variant
     s.batch = options.batch;
     s.keep_last_plan = options.keep_last_plan;
