@@ -99,6 +99,14 @@ std::string join(const std::vector<std::string>& items, const char* separator = 
   return out;
 }
 
+/// "; tracking weight W" for the rows whose planner ranks candidates with planners::RankingSettings (all but
+/// AutoChaser): the weight differs between planners (planners::tracking_weight_for) and changes the tables.
+std::string ranking_weight_text(const PaperPlanner& row) {
+  if (std::string(row.planner) == "autochaser") return "";
+  const planners::PlannerOptions options = paper_episode_options(row, 1.0).planner_settings();
+  return "; ranking's tracking weight " + episode_cli::show(planners::tracking_weight_for(row.planner, options));
+}
+
 /// The table header: every setting, and what was skipped or failed. The episode and safety settings are
 /// read from paper_episode_options (with the first row's planner), so that they are stated where they are set.
 std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
@@ -138,7 +146,7 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
   };
   for (const auto& p : paper_planners())
     if (std::find(o.planners.begin(), o.planners.end(), p.label) != o.planners.end())
-      lines.push_back(std::string("planner ") + p.label + ": " + p.description);
+      lines.push_back(std::string("planner ") + p.label + ": " + p.description + ranking_weight_text(p));
   for (const auto& n : not_run) lines.push_back("not run: " + n);
   return lines;
 }

@@ -29,4 +29,9 @@ for run in d["runs"]:
                  "target predictor: " + ("on" if p["predictor"] else "off")):
         check(text in header, f"the header does not say '{text}':\n{header}")
         check(text in tables, f"tables.md does not say '{text}'")
+    if p["name"] != "autochaser":  # the weight of the ranking the run used, on its planner's line
+        line = next((l for l in d["settings"] if l.startswith(f"planner {run['label']}: ")), "")
+        check(line.endswith(f"; ranking's tracking weight {p['tracking_weight']:g}"),
+              f"the header's line for {run['label']} does not state its tracking weight {p['tracking_weight']:g}: "
+              f"'{line}'")
 print("check_paper_header: the header states what every run recorded")
