@@ -99,8 +99,9 @@ std::string join(const std::vector<std::string>& items, const char* separator = 
   return out;
 }
 
-/// "; tracking weight W" for the rows whose planner ranks candidates with planners::RankingSettings (all but
-/// AutoChaser): the weight differs between planners (planners::tracking_weight_for) and changes the tables.
+/// "; ranking's tracking weight W" for the rows whose planner ranks candidates with planners::RankingSettings
+/// (all but AutoChaser): the weight differs between planners (planners::tracking_weight_for) and changes the
+/// tables.
 std::string ranking_weight_text(const PaperPlanner& row) {
   if (std::string(row.planner) == "autochaser") return "";
   const planners::PlannerOptions options = paper_episode_options(row, 1.0).planner_settings();

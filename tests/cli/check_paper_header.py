@@ -34,4 +34,5 @@ for run in d["runs"]:
         check(line.endswith(f"; ranking's tracking weight {p['tracking_weight']:g}"),
               f"the header's line for {run['label']} does not state its tracking weight {p['tracking_weight']:g}: "
               f"'{line}'")
+        check("- " + line in tables, f"tables.md does not say '{line}'")
 print("check_paper_header: the header states what every run recorded")
