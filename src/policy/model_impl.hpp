@@ -24,7 +24,7 @@ struct Linear {
 
 // A folded layer in float, ready for the products.
 struct Dense {
-  Eigen::MatrixXf weight;  // out x in, column-major (Eigen's blocked kernel packs it once per call)
+  Eigen::MatrixXf weight;  // out x in, column-major (gemm holds it packed for Eigen's blocked kernel)
   Eigen::VectorXf bias;
   Gemm gemm;
 
