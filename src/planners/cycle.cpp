@@ -60,6 +60,7 @@ Context::Context(const projection::Settings& projection, const perception::Setti
   for (Eigen::VectorXd* v : {&cx_, &cy_, &fit_x_, &fit_y_}) v->resize(n);
   for (Eigen::VectorXd* v : {&x_, &y_}) v->resize(m);
   shifted_.resize(m, 2);
+  shift_basis_.resize(m, n);
   const double dt = std::min(0.1, projection.horizon);
   command_row_.resize(n);
   // v1 (response_time 0): the window [0, dt], evaluated exactly as before.
@@ -200,12 +201,20 @@ void Context::shift(const Eigen::RowVectorXd& xi, double dt, const Eigen::Vector
                     Eigen::RowVectorXd& out) const {
   const int n = projection_.coefficients(), m = projection_.steps;
   const double T = projection_.horizon;
+  // The basis at the shifted times depends on dt alone, which is the same every cycle at a fixed rate: it is
+  // kept for the last dt.
+  if (!(dt == shift_basis_dt_)) {
+    for (int k = 0; k < m; ++k) {
+      const double s = std::min(1.0, (basis().times(k) + dt) / T);
+      for (int i = 0; i < n; ++i) shift_basis_(k, i) = core::bernstein(projection_.degree, i, s);
+    }
+    shift_basis_dt_ = dt;
+  }
   Eigen::MatrixX2d& positions = shifted_;
   for (int k = 0; k < m; ++k) {
-    const double s = std::min(1.0, (basis().times(k) + dt) / T);
     double x = 0, y = 0;
     for (int i = 0; i < n; ++i) {
-      const double b = core::bernstein(projection_.degree, i, s);
+      const double b = shift_basis_(k, i);
       x += b * xi(i);
       y += b * xi(n + i);
     }

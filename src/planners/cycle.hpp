@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -160,6 +161,8 @@ class Context {
   // Workspaces (fill_row, shift, world_positions), sized at construction.
   mutable Eigen::VectorXd cx_, cy_, x_, y_;
   mutable Eigen::MatrixX2d shifted_;
+  mutable Eigen::MatrixXd shift_basis_;  // m x n: the basis at the steps' times plus shift_basis_dt_
+  mutable double shift_basis_dt_ = std::numeric_limits<double>::quiet_NaN();
   mutable Eigen::VectorXd fit_x_, fit_y_;
 };
 
