@@ -81,8 +81,8 @@ def main():
     lines.append(f'<clipPath id="window"><rect x="{left}" y="{top}" width="{plot_width:.1f}" '
                  f'height="{(y_max - y_min) * scale:.1f}"/></clipPath><g clip-path="url(#window)">')
     # Static obstacles in the window.
-    for o in d["obstacles"]:
-        if d["obstacles"].index(o) in moving:
+    for index, o in enumerate(d["obstacles"]):
+        if index in moving:
             continue
         if o["kind"] == "circle":
             cx, cy = px(o["x"] / 100.0, o["y"] / 100.0)
@@ -106,7 +106,7 @@ def main():
                          f'stroke="#555555"/>')
             lines.append(f'<text x="{cx + radius * scale + 3:.1f}" y="{cy:.1f}" fill="#555555">{t:g} s</text>')
     # The robot's path, coloured by the layer's choice of the cycle in force.
-    cycles = [c for c in d["cycles"]]
+    cycles = d["cycles"]
     cycle_times = [c["t"] / 1000.0 for c in cycles]
     choice_at = []
     k = 0
