@@ -338,9 +338,12 @@ TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {
   // moving_horizon. 2.5 m ahead at 1 m/s, it is 0.5 m away at 2 s: clear through 2 s, not through 2.5 s.
   const core::Scan open = make_scan([](double) { return kInf; });
   const std::vector<MovingPoint> oncoming = {{Vec2(2.5, 0.0), Vec2(-1.0, 0.0)}};
-  planners::safety::Settings longer = certifier_settings();
+  // (Without the standoff: this is the straight path's rule alone; the next test adds the standoff.)
+  planners::safety::Settings straight = certifier_settings();
+  straight.moving_standoff = 0.0;
+  planners::safety::Settings longer = straight;
   longer.moving_horizon = 2.5;
-  Certifier two(certifier_settings()), two_and_a_half(longer);
+  Certifier two(straight), two_and_a_half(longer);
   double distance = 0.0;
   two.begin(open, Vec2::Zero(), Vec2::Zero(), oncoming);
   EXPECT_TRUE(two.certify(Vec2::Zero(), &distance));
@@ -356,6 +359,41 @@ TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {
   Certifier moving(certifier_settings());
   moving.begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), {{Vec2(0.2, 2.0), Vec2(0.0, -4.0)}});
   EXPECT_FALSE(moving.certify(Vec2::Zero()));
+}
+
+TEST(Certifier, AStopBesideALaneKeepsTheStandoff) {
+  // A point passing at 1 m/s, abeam within the 2 s horizon: a stop must keep the clearance (0.3 m) plus 0.5 s of its 1 m/s (0.5 m) from its
+  // lane, so that a robot standing there can still dodge a turn towards it that tracking sees late.
+  const core::Scan open = make_scan([](double) { return kInf; });
+  Certifier c(certifier_settings());
+  ASSERT_EQ(c.settings().moving_standoff, 0.5);  // the default
+  double distance = 0.0;
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.75), Vec2(-1.0, 0.0)}});
+  EXPECT_FALSE(c.certify(Vec2::Zero(), &distance));
+  EXPECT_NEAR(distance, 0.75, 1e-9);  // the distance reported is still the bare one
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.85), Vec2(-1.0, 0.0)}});
+  EXPECT_TRUE(c.certify(Vec2::Zero()));
+  // Moving away from the lane before stopping is certified where the stop here is not.
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(1.5, 0.6), Vec2(-1.0, 0.0)}});
+  EXPECT_FALSE(c.certify(Vec2::Zero()));
+  EXPECT_TRUE(c.certify_held(Vec2(0.0, -1.0), 0.5));
+  // The standoff scales with the point's speed (its passive-safety reach): at 0.4 m/s, 0.2 m.
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(0.6, 0.55), Vec2(-0.4, 0.0)}});
+  EXPECT_TRUE(c.certify(Vec2::Zero()));
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(0.6, 0.45), Vec2(-0.4, 0.0)}});
+  EXPECT_FALSE(c.certify(Vec2::Zero()));
+  // While the robot moves, passive safety governs; the standoff applies to where it comes to rest. A lane
+  // crossed early, far from the point, then a stop well past it: certified.
+  c.begin(open, Vec2::Zero(), Vec2::Zero(), {{Vec2(6.0, 0.6), Vec2(-1.0, 0.0)}});
+  EXPECT_TRUE(c.certify_held(Vec2(0.0, 2.0), 1.0));
+  // A negative standoff, or one longer than the horizon, is refused by name.
+  planners::safety::Settings bad = certifier_settings();
+  bad.moving_standoff = -0.1;
+  std::string error;
+  EXPECT_FALSE(bad.validate(&error));
+  EXPECT_NE(error.find("moving_standoff"), std::string::npos) << error;
+  bad.moving_standoff = 7.0;
+  EXPECT_FALSE(bad.validate(&error));
 }
 
 TEST(Certifier, ASmallerClearanceForTheLastResort) {
@@ -540,6 +578,39 @@ TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   EXPECT_EQ(safe.metrics.collisions, 0);
   EXPECT_GT(safe.metrics.min_clearance_m, 0.0);
   EXPECT_GT(safe.metrics.shield.evasive, 0);
+}
+
+TEST(ShieldEpisode, DodgesAnObstacleThatTurnsOutOfItsLaneAtTheRobot) {
+  // A 0.6 m box drives along a lane beside a robot that a careless planner keeps still, then turns by 90
+  // degrees at the corner nearest the robot, straight at it (as a cylinder did to AutoChaser in
+  // clutter-dynamic-2ms, dynamic-a-9; docs/safety.md). Standing a few tenths of a metre from the box's side of
+  // the lane, the robot cannot dodge a turn its tracking sees a quarter of a second late. Over lanes 0.7 to
+  // 1.25 m from the robot: without the standoff some end in contact; with it, none comes near.
+  int contacts_without = 0;
+  double closest_with = INFINITY;
+  for (int i = 0; i <= 11; ++i) {
+    const double lane = 0.7 + 0.05 * i;
+    core::Scenario s;
+    s.name = "turning";
+    s.duration = 10.0;
+    core::ObstacleSpec mover = box(Vec2(5.0, lane), Vec2(0.6, 0.6));
+    mover.path = {Vec2(5.0, lane), Vec2(0.0, lane), Vec2(0.0, -6.0)};
+    mover.speed = 1.0;
+    s.obstacles = {mover};
+    s.target = {{0.0, Vec2(-1.5, 0.0)}};
+    s.sensor.beams = 360;
+    planners::safety::Settings lane_only = episode_shield();
+    lane_only.moving_standoff = 0.0;
+    auto before = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), lane_only);
+    contacts_without += sim::run_episode(s, *before, lagged_episode()).metrics.collisions;
+    auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), episode_shield());
+    const auto safe = sim::run_episode(s, *shielded, lagged_episode());
+    EXPECT_EQ(safe.metrics.collisions, 0) << "lane " << lane;
+    EXPECT_GT(safe.metrics.shield.evasive, 0) << "lane " << lane;
+    closest_with = std::min(closest_with, safe.metrics.min_clearance_m);
+  }
+  EXPECT_GT(contacts_without, 0);
+  EXPECT_GT(closest_with, 0.2);
 }
 
 /// One cycle of a shielded planner at rest at the origin with this scan.

@@ -55,6 +55,12 @@ struct Settings {
   /// m/s: the fastest a moving obstacle is expected to go. Caps the speed of moving_may_turn (a velocity
   /// estimate above it is more likely a mismatch of the tracking than an obstacle's speed).
   double moving_speed_max = 1.0;
+  /// s: a stop must also keep this much of each moving point's passive-safety speed (its reach) beyond the
+  /// clearance from that point's straight path: at 1 m/s and 0.5 s, 0.5 m more. Passive safety ends once the
+  /// robot stands still, and a still robot next to an obstacle's lane cannot dodge a turn towards it that its
+  /// velocity tracking sees a quarter of a second late (docs/safety.md, "A stop beside a lane"). 0: the stop
+  /// is only kept clear of the straight paths, as before.
+  double moving_standoff = 0.5;
   /// Judge each object perception reports moving against earlier scans (MotionEvidence): one the LiDAR shows
   /// still is treated as static, unless an object taken for moving (verdict moved or
   /// unknown) was near it in the last 0.5 s.
@@ -190,6 +196,7 @@ class Certifier {
     Eigen::Vector2d center = Eigen::Vector2d::Zero(), velocity = Eigen::Vector2d::Zero();
     double radius = 0.0;             // of the circle about center holding every point
     double reach = 0.0;              // m/s at which they may turn or reverse (0: Settings::moving_may_turn off)
+    double standoff = 0.0;           // m a stop keeps from their straight paths beyond the clearance
     Eigen::Vector2d ahead = Eigen::Vector2d::Zero();  // unit heading (zero: none, a full disk)
   };
   std::vector<Group> groups_;

@@ -23,6 +23,9 @@ bool Settings::validate(std::string* error) const {
   c.positive(check_spacing, "check_spacing");
   c.non_negative(moving_horizon, "moving_horizon");
   c.non_negative(moving_speed_max, "moving_speed_max");
+  c.non_negative(moving_standoff, "moving_standoff");
+  c.require(moving_standoff <= horizon, "moving_standoff (", moving_standoff, ") must not exceed horizon (", horizon,
+            ")");
   c.require(moving_turn_max >= 90.0 && moving_turn_max <= 180.0, "moving_turn_max (", moving_turn_max,
             ") must lie in [90, 180] degrees");
   c.positive(horizon, "horizon");
@@ -112,6 +115,7 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     const double speed_of = g.velocity.norm();
     if (speed_of > 0.0) g.ahead = g.velocity / speed_of;
     g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(speed_of, turning)) : 0.0;
+    g.standoff = g.reach * settings_.moving_standoff;
     groups_.push_back(g);
     i = end;
   }
@@ -168,7 +172,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
   // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
   // the clearance (now or earlier); with `stop_early`, the groups after that one are not looked at.
-  const auto near_moving = [&](auto&& predicted, bool stop_early) {
+  const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest) {
     // With `futures`, the worst of five: the velocity kept, zero, reversed, turned 90 degrees either way. Each is
     // the distance to a translated shape, so a group's bounding circle still bounds it from below.
     const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
@@ -182,12 +186,13 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     };
     for (const Group* group : near_groups_) {
       const Group& g = *group;
+      const double kept = at_rest ? keep + g.standoff : keep;  // a stop keeps the standoff too
       const double bound = distance(g.center, g.velocity) - g.radius;
-      if (bound >= keep && (!distances || bound >= verdict.min_distance)) continue;
+      if (bound >= kept && (!distances || bound >= verdict.min_distance)) continue;
       for (std::size_t i = g.first; i < g.last; ++i) {
         const double d = distance(moving_[i].position, g.velocity);
         verdict.min_distance = std::min(verdict.min_distance, d);
-        if (d < keep) too_near = true;
+        if (d < kept) too_near = true;
       }
       if (too_near && stop_early) return true;
     }
@@ -195,18 +200,18 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   };
   // Stopped at p from `now`: at rest until moving_horizon, clear of every moving point's straight path through
   // then (a stop in an oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon
-  // away).
+  // away), by the clearance and the group's standoff (a still robot must be able to dodge a late-seen turn).
   const auto near_at_rest = [&](const Checkpoint& c, bool stop_early) {
     const double t0 = c.now, t1 = std::max(c.now, settings_.moving_horizon);
     return near_moving(
         [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - c.p, w, t0, t1); },
-        stop_early);
+        stop_early, true);
   };
   // Moving at p at `now`: clear of each moving point's prediction then (through moving_horizon).
   const auto near_now = [&](const Checkpoint& c, bool stop_early) {
     return c.now <= settings_.moving_horizon + 1e-12 &&
            near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); },
-                       stop_early);
+                       stop_early, false);
   };
   // Passive safety: clear of wherever a moving point could be had it turned by up to moving_turn_max (a sector
   // of the disk about its heading; 90 degrees: the half disk ahead) or reversed (a segment behind it) at its
@@ -289,7 +294,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     for (const Group& g : groups_) {
       const double predicted = closest_approach(g.center - center, g.velocity, 0.0, through);
       const double reached = (g.center - center).norm() - g.reach * end;
-      if (std::min(predicted, reached) - g.radius - radius < keep) near_groups_.push_back(&g);
+      if (std::min(predicted, reached) - g.radius - radius < keep + g.standoff) near_groups_.push_back(&g);
     }
   }
 
