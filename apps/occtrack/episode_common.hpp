@@ -260,6 +260,12 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                   "robot stops (90: the half disk ahead of it; 180: any heading; docs/safety.md)")
       ->check(e::validator([](const std::string& t) { return e::check(t, 90.0, 180.0); }, "DEG in [90, 180]"))
       ->capture_default_str();
+  cmd->add_option("--standoff", o.planner_options.standoff,
+                  "Safety layer: seconds of a moving obstacle's speed that a stop keeps from its lane beyond the "
+                  "clearance, so that a still robot can dodge a late-seen turn (0: clear of the lane only, as "
+                  "before; docs/safety.md)")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 2.0); }, "S in [0, 2]"))
+      ->capture_default_str();
 
   add_protocol_options(cmd, o);
 }

@@ -31,6 +31,7 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"planning_period_s", p.planning_period},
                   {"accel_max", p.accel_max},
                   {"passive_turn_deg", p.passive_turn},
+                  {"standoff_s", p.standoff},
                   {"model", p.model.empty() ? nlohmann::json(nullptr) : nlohmann::json(p.model)},
                   {"batch", p.batch},
                   {"iterations", p.iterations},

@@ -89,6 +89,7 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
   s.period = options.planning_period;
   s.accel_max = options.accel_max;
   s.moving_turn_max = options.passive_turn;
+  s.moving_standoff = options.standoff;
   return safety::make_shielded(std::move(planner), s);
 }
 

@@ -155,6 +155,7 @@ struct PlannerOptions {
   double planning_period = 0.05; ///< s between cycles, for the safety layer
   double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer
   double passive_turn = 180.0;   ///< degrees, the safety layer's safety::Settings::moving_turn_max
+  double standoff = 0.5;         ///< s, the safety layer's safety::Settings::moving_standoff
 };
 
 /// Names the command line accepts, e.g. "projcem", "follower".
