@@ -171,7 +171,8 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // The moving points' distances, object by object: `distance(q, w)` is that of a point at q (at scan time)
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
   // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
-  // the clearance (now or earlier); with `stop_early`, the groups after that one are not looked at.
+  // the clearance, or (`at_rest`) the clearance plus the group's standoff, now or earlier; with `stop_early`,
+  // the groups after that one are not looked at.
   const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest) {
     // With `futures`, the worst of five: the velocity kept, zero, reversed, turned 90 degrees either way. Each is
     // the distance to a translated shape, so a group's bounding circle still bounds it from below.
