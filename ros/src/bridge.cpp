@@ -18,6 +18,9 @@ TrackerConfig default_tracker_config() {
   c.model = o.model;
   c.batch = o.batch;
   c.shield = o.shield;
+  c.predictor = o.predictor;
+  c.passive_turn = o.passive_turn;
+  c.standoff = o.standoff;
   c.planning_period = o.planning_period;
   c.accel_max = o.accel_max;
   c.response_time = o.response_time;
@@ -39,6 +42,9 @@ planners::TrackerSettings to_settings(const TrackerConfig& c) {
   o.model = c.model;
   o.batch = c.batch;
   o.shield = c.shield;
+  o.predictor = c.predictor;
+  o.passive_turn = c.passive_turn;
+  o.standoff = c.standoff;
   o.planning_period = c.planning_period;
   o.accel_max = c.accel_max;
   o.response_time = c.response_time;

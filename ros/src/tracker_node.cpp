@@ -59,6 +59,9 @@ class TrackerNode {
     pnh.param<std::string>("model", s.model, s.model);
     pnh.param("batch", s.batch, s.batch);
     pnh.param("shield", s.shield, s.shield);
+    pnh.param("predictor", s.predictor, s.predictor);
+    pnh.param("passive_turn", s.passive_turn, s.passive_turn);  // the safety layer refuses bad values by name
+    pnh.param("standoff", s.standoff, s.standoff);
     double rate = 20.0;
     pnh.param("rate", rate, rate);
     if (!(rate > 0.0 && rate <= 1000.0)) throw std::invalid_argument("~rate must lie in (0, 1000] Hz");
