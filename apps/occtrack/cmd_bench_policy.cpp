@@ -1,5 +1,6 @@
 // occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
-//                       [--repeats R] [--scenario FILE] [--seed S] [--shield] [--predictor] [--json FILE]
+//                       [--repeats R] [--scenario FILE] [--seed S] [--shield [--standoff S]] [--predictor]
+//                       [--json FILE]
 //
 // Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
 // projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
@@ -7,8 +8,9 @@
 // and mean in milliseconds and the median split per stage. --random times a model with random weights, so
 // that the cost can be measured before a model is trained. --shield puts the safety layer around the policy
 // (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle, and by
-// what the layer chose. --predictor ranks against the target predictor (its cost: the difference in the cycle
-// against a run without it).
+// what the layer chose; --standoff sets its moving_standoff (0: the layer before the standoff, to compare side
+// by side). --predictor ranks against the target predictor (its cost: the difference in the cycle against a
+// run without it).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -44,6 +46,7 @@ struct Options {
   bool rank_stop = true;
   bool shield = false;
   bool predictor = false;
+  double standoff = planners::safety::Settings{}.moving_standoff;  // s, the layer's default
   int iterations = planners::LearnedPolicySettings{}.projection.iterations;  // the planners' default
   int repeats = 1000;
   double seconds = 5.0;
@@ -137,6 +140,7 @@ int run(const Options& o) {
   if (o.shield) {
     planners::safety::Settings shield;
     shield.response_time = 0.25;
+    shield.moving_standoff = o.standoff;
     runner = planners::safety::make_shielded(std::move(runner), shield);
   }
 
@@ -195,7 +199,8 @@ int run(const Options& o) {
   std::printf("  split (medians): perception %.3f, PointNet %.3f, decoder %.3f, projection %.3f, ranking %.3f ms\n",
               sp.median, sn.median, sd.median, sj.median, sr.median);
   if (o.shield) {
-    std::printf("  safety layer: median %.3f ms, p99 %.3f ms, max %.3f ms of the cycle\n", ss.median, ss.p99, ss.max);
+    std::printf("  safety layer (standoff %.2f s): median %.3f ms, p99 %.3f ms, max %.3f ms of the cycle\n", o.standoff,
+                ss.median, ss.p99, ss.max);
     std::printf("  by its choice (cycles: median / max ms):");
     for (int a = 0; a < planners::kSafetyActions; ++a) {
       const std::vector<double>& times = by_action[static_cast<std::size_t>(a)];
@@ -233,7 +238,10 @@ int run(const Options& o) {
         {"split_median_ms",
          {{"perception", sp.median}, {"pointnet", sn.median}, {"decoder", sd.median}, {"projection", sj.median},
           {"ranking", sr.median}}}};
-    if (o.shield) doc["safety_ms"] = {{"median", ss.median}, {"p99", ss.p99}, {"max", ss.max}};
+    if (o.shield) {
+      doc["safety_ms"] = {{"median", ss.median}, {"p99", ss.p99}, {"max", ss.max}};
+      doc["standoff_s"] = o.standoff;
+    }
     if (!write_text_file("occtrack bench policy", o.json_path, doc.dump(2) + "\n")) return kExitInputError;
   }
   return kExitOk;
@@ -260,6 +268,9 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
                 "Put the safety layer around the policy (response time 0.25 s) and time its share of the cycle");
   cmd->add_flag("--predictor", o->predictor,
                 "Rank against the target predictor (docs/target_prediction.md) instead of constant velocity");
+  add_bounded_option(cmd, "--standoff", o->standoff,
+                     "With --shield: the layer's moving_standoff, s (0: a stop clear of the lanes only, as before)", 0.0,
+                     2.0);
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
