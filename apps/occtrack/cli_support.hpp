@@ -25,6 +25,10 @@ std::pair<CLI::App*, std::shared_ptr<Options>> add_command(CLI::App& parent, con
 /// A command that only groups subcommands (bench, dataset, scenario): one of them must be given.
 CLI::App* add_command_group(CLI::App& parent, const std::string& name, const std::string& description);
 
+/// The largest safety-layer standoff (s) a command takes with --standoff (`run`, `bench suite`, `bench
+/// policy`); the layer itself allows up to its horizon.
+inline constexpr double kStandoffMax = 2.0;
+
 /// An option whose value must lie in [low, high] (CLI11 refuses others before the command runs), with its
 /// default shown in --help.
 template <typename T, typename Bound>

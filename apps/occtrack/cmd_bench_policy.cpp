@@ -270,7 +270,7 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
                 "Rank against the target predictor (docs/target_prediction.md) instead of constant velocity");
   add_bounded_option(cmd, "--standoff", o->standoff,
                      "With --shield: the layer's moving_standoff, s (0: a stop clear of the lanes only, as before)", 0.0,
-                     2.0);
+                     kStandoffMax);
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }

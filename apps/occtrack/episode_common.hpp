@@ -264,7 +264,8 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                   "Safety layer: seconds of a moving obstacle's speed that a stop keeps from its lane beyond the "
                   "clearance, so that a still robot can dodge a late-seen turn (0: clear of the lane only, as "
                   "before; docs/safety.md)")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 2.0); }, "S in [0, 2]"))
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, kStandoffMax); },
+                           "S in [0, " + e::show(kStandoffMax) + "]"))
       ->capture_default_str();
 
   add_protocol_options(cmd, o);
