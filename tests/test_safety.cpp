@@ -139,6 +139,64 @@ TEST(FreeSpace, BeamsWithoutReturnAndBadRanges) {
   EXPECT_FALSE(half.disk_free(Vec2::Zero(), 0.3));  // the disk around the robot reaches behind it
 }
 
+// The fast paths of disk_free (the nearest return, the window's minimum, the own sector first) against a plain
+// test of every sector: the disk is free when each sector it crosses reaches the disk's farthest point within
+// the sector's bearings. Random scans (returns, beams without one, unusable ranges) and random disks: knife
+// edges have probability zero. The overload given the bearing must agree too.
+TEST(FreeSpace, FastPathsAgreeWithAPlainSectorBySectorTest) {
+  std::mt19937 rng(20261204);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int mismatches = 0, free_count = 0, queries = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const int beams = trial % 3 == 0 ? 90 : 360;
+    const double base = 1.0 + 4.0 * unit(rng);
+    core::Scan scan = make_scan(
+        [&](double) {
+          const double kind = unit(rng);
+          if (kind < 0.05) return kInf;  // no return: free to range_max
+          if (kind < 0.07) return kind < 0.06 ? 0.0 : std::nan("");  // unusable: nothing free
+          return base * (0.7 + 0.6 * unit(rng));
+        },
+        beams, 8.0);
+    scan.angle_min = 2.0 * kPi * unit(rng) - kPi;
+    FreeSpace free;
+    free.build(scan);
+    const double increment = scan.angle_increment;
+    const auto radius_of = [&](int k) {  // sector k: between beams k and k + 1
+      const auto beam = [&](int i) {
+        const double r = scan.ranges[static_cast<std::size_t>(i % beams)];
+        return std::isnan(r) || r <= 0.0 ? 0.0 : std::min(r, scan.range_max);
+      };
+      return std::min(beam(k), beam(k + 1));
+    };
+    for (int q = 0; q < 3000; ++q, ++queries) {
+      const Vec2 p = base * Vec2(2.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
+      const double c = 0.02 + 0.4 * unit(rng);
+      const double d = p.norm(), bearing = std::atan2(p.y(), p.x());
+      bool plain = true;
+      for (int k = 0; k < beams && plain; ++k) {
+        // The angular distance from the disk's bearing to the sector's bearings [a, a + increment].
+        double a = scan.angle_min + k * increment - bearing;
+        a -= 2.0 * kPi * std::floor((a + kPi) / (2.0 * kPi));  // into [-pi, pi)
+        const double b = a + increment;
+        const double gap = a > 0.0 ? std::min(a, 2.0 * kPi - b) : (b < 0.0 ? -b : 0.0);
+        if (d > c && gap > std::asin(c / d)) continue;  // the sector's bearings miss the disk
+        const double s = d * std::sin(gap);
+        const double farthest = d * std::cos(gap) + std::sqrt(std::max(0.0, c * c - s * s));
+        if (radius_of(k) < farthest) plain = false;
+      }
+      const bool fast = free.disk_free(p, c);
+      mismatches += fast != plain;
+      free_count += fast;
+      EXPECT_EQ(fast, free.disk_free(p, c, bearing));
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+  // Both answers occur often enough for the comparison to mean something.
+  EXPECT_GT(free_count, queries / 10);
+  EXPECT_LT(free_count, queries * 9 / 10);
+}
+
 planners::safety::Settings certifier_settings(double tau = 0.0, double latency = 0.0) {
   planners::safety::Settings s;
   s.robot_radius = 0.25;

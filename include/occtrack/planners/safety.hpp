@@ -86,13 +86,18 @@ class FreeSpace {
   /// Reads the scan. Allocates only when a scan has more beams than any before.
   void build(const core::Scan& scan);
   /// True when the whole disk of radius `clearance` around p (robot-centric) lies in the known-free region.
-  bool disk_free(const Eigen::Vector2d& p, double clearance) const;
+  bool disk_free(const Eigen::Vector2d& p, double clearance) const { return disk_free(p, clearance, nullptr); }
+  /// The same, given p's bearing std::atan2(p.y(), p.x()) (a caller that needs it too computes it once).
+  bool disk_free(const Eigen::Vector2d& p, double clearance, double bearing) const {
+    return disk_free(p, clearance, &bearing);
+  }
   /// The smallest free radius over all directions (0 with no usable beam).
   double nearest() const { return nearest_; }
   /// The bearing (radians, world axes) of the sector with that smallest radius (0 with no usable beam).
   double nearest_bearing() const { return nearest_bearing_; }
 
  private:
+  bool disk_free(const Eigen::Vector2d& p, double clearance, const double* bearing) const;  // computed if null
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
   double window_min(long lo, long hi) const;
 
@@ -248,7 +253,8 @@ class MotionEvidence {
     double time = -INFINITY;
   };
   void fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time);
-  bool on_surface(const Frame& frame, const Eigen::Vector2d& world) const;
+  /// `bearing`: that of world - frame.robot, std::atan2 of its y and x.
+  bool on_surface(const Frame& frame, const Eigen::Vector2d& world, double bearing) const;
   const Frame* older_than(double age) const;
 
   Options options_;

@@ -77,14 +77,14 @@ double FreeSpace::window_min(long lo, long hi) const {
   return std::min(level[lo], level[hi - (1L << j) + 1]);
 }
 
-bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
+bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const double* given_bearing) const {
   if (beams_ == 0 || !p.allFinite() || !(clearance >= 0.0) || !std::isfinite(clearance)) return false;
   const int sectors = full_circle_ ? beams_ : beams_ - 1;
   const double d = p.norm();
   // Inside the circle every sector reaches (the nearest return's range): free, without the angles.
   if (full_circle_ && d + clearance <= nearest_) return true;
   // u: the centre's bearing in sector units from beam 0, in [0, 2 pi / increment).
-  double bearing = std::atan2(p.y(), p.x()) - angle_min_;
+  double bearing = (given_bearing != nullptr ? *given_bearing : std::atan2(p.y(), p.x())) - angle_min_;
   bearing -= kTwoPi * std::floor(bearing / kTwoPi);
   const double u = bearing / increment_;
   if (d <= clearance) {  // the disk holds the robot: every direction crosses it
@@ -92,6 +92,12 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
     if (nearest_ >= d + clearance) return true;
     return exact(p, d, clearance, u, INFINITY);
   }
+  // Fast false: the disk's farthest point, on the centre's own bearing, lies beyond its sector (what exact()
+  // would find there first, without the angles). The window below holds that sector, so nothing it could
+  // find would make the disk free.
+  long own = static_cast<long>(std::floor(u)) % sectors;
+  if (own < 0) own += sectors;
+  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return false;
   const double half_width = std::asin(clearance / d) / increment_;  // the disk's angular half-span, in sectors
   long lo = static_cast<long>(std::floor(u - half_width));
   long hi = static_cast<long>(std::floor(u + half_width));
@@ -108,11 +114,6 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance) const {
   }
   // Fast: every sector the disk crosses reaches beyond the disk's farthest point.
   if (window_min(lo, hi) >= d + clearance) return true;
-  // Fast the other way: the disk's farthest point, on the centre's own bearing, lies beyond its sector (what
-  // exact() would find there first, without the angles).
-  long own = static_cast<long>(std::floor(u)) % sectors;
-  if (own < 0) own += sectors;
-  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return false;
   return exact(p, d, clearance, u, half_width);
 }
 

@@ -87,11 +87,10 @@ const MotionEvidence::Frame* MotionEvidence::older_than(double age) const {
   return best;
 }
 
-bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world) const {
+bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world, double bearing) const {
   const long n = static_cast<long>(frame.returns.size());
   if (n == 0) return false;
-  const Eigen::Vector2d q = world - frame.robot;
-  const long centre = std::lround((std::atan2(q.y(), q.x()) - frame.angle_min) / frame.increment);
+  const long centre = std::lround((bearing - frame.angle_min) / frame.increment);
   for (long k = centre - 3; k <= centre + 2; ++k) {
     long i = k, j = k + 1;
     if (frame.full_circle) {
@@ -127,12 +126,19 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
       still = false;
       continue;
     }
-    // Something came: a point of the object where the earlier scan saw free space.
+    // Something came: a point of the object where the earlier scan saw free space. The points on a surface
+    // the earlier scan saw are counted only while the count can still decide (still, and half not yet reached
+    // but within reach); the point's bearing then serves both tests.
     std::size_t seen = 0;
     for (std::size_t i = 0; i < count; ++i) {
-      const Eigen::Vector2d world = current_.robot + points[i].position;
-      if (earlier->free.disk_free(world - earlier->robot, tol)) return Verdict::moved;
-      if (on_surface(*earlier, world)) ++seen;
+      const Eigen::Vector2d world = current_.robot + points[i].position, q = world - earlier->robot;
+      if (still && 2 * seen < count && 2 * (seen + count - i) >= count) {
+        const double bearing = std::atan2(q.y(), q.x());
+        if (earlier->free.disk_free(q, tol, bearing)) return Verdict::moved;
+        if (on_surface(*earlier, world, bearing)) ++seen;
+      } else if (earlier->free.disk_free(q, tol)) {
+        return Verdict::moved;
+      }
     }
     // Something left: an earlier return near the object where this scan sees free space.
     const double near = radius + options_.reach * (current_.time - earlier->time) + tol;
@@ -163,7 +169,9 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
 bool MotionEvidence::seen_before(const Eigen::Vector2d& point) const {
   if (!std::isfinite(current_.time) || !point.allFinite()) return false;
   const Frame* earlier = older_than(options_.baselines[0]);
-  return earlier != nullptr && on_surface(*earlier, current_.robot + point);
+  if (earlier == nullptr) return false;
+  const Eigen::Vector2d world = current_.robot + point, q = world - earlier->robot;
+  return on_surface(*earlier, world, std::atan2(q.y(), q.x()));
 }
 
 }  // namespace occtrack::planners::safety
