@@ -17,7 +17,12 @@ class Shielded final : public Planner {
       : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings(certifier_.hold())) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
     moving_.reserve(static_cast<std::size_t>(2 * perception_.settings().nearest_count));
-    candidates_.reserve(static_cast<std::size_t>(6 * certifier_.settings().evasive_directions));
+    const int directions = certifier_.settings().evasive_directions;
+    candidates_.reserve(static_cast<std::size_t>(6 * directions));
+    for (int i = 0; i < directions; ++i) {
+      const double angle = 2.0 * M_PI * i / directions;
+      directions_.emplace_back(std::cos(angle), std::sin(angle));
+    }
     memory_.reserve(kMemoryCapacity);
   }
 
@@ -150,9 +155,8 @@ class Shielded final : public Planner {
     candidates_.clear();
     for (const double hold : {0.5, 1.0, 1.5})
       for (const double share : {1.0, 0.5})
-        for (int i = 0; i < s.evasive_directions; ++i) {
-          const double angle = 2.0 * M_PI * i / s.evasive_directions;
-          const Eigen::Vector2d c = share * s.speed_max * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+        for (const Eigen::Vector2d& direction : directions_) {
+          const Eigen::Vector2d c = share * s.speed_max * direction;
           candidates_.push_back({c, hold, (c - wish).norm()});
         }
     std::sort(candidates_.begin(), candidates_.end(), [](const Candidate& a, const Candidate& b) {
@@ -211,6 +215,7 @@ class Shielded final : public Planner {
     double hold, gap;  // s held before braking; distance from the planner's wish
   };
   std::vector<Candidate> candidates_;  // the evasive manoeuvres, storage kept from cycle to cycle
+  std::vector<Eigen::Vector2d> directions_;  // theirs: evasive_directions unit vectors, evenly spread
 
   /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
   struct Choice {
