@@ -6,6 +6,7 @@
 #include <random>
 
 #include "occtrack/core/bernstein.hpp"
+#include "occtrack/core/robot_response.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/planners/planner.hpp"
@@ -65,6 +66,38 @@ TEST(ResponseTime, ZeroIsTheV1CommandExactly) {
   const core::Scenario scenario = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
   planners::Follower v1, zero(planners::FollowerSettings{});
   EXPECT_EQ(plan_once(v1, scenario).command_velocity, plan_once(zero, scenario).command_velocity);
+}
+
+// velocity_change skips the square root well inside the limit: its answer must be the plain formula's (the
+// root compared with the limit) bit for bit, also for changes a hair either side of the limit and for the
+// values a simulator can meet (zero, no lag, a zero limit).
+TEST(ResponseTime, TheVelocityChangeIsThePlainFormulasBitForBit) {
+  const auto plain = [](const Eigen::Vector2d& v, const Eigen::Vector2d& u, double lag, double limit) {
+    Eigen::Vector2d change = (u - v) * lag;
+    const double size = change.norm();
+    if (size > limit) change *= limit / size;
+    return change;
+  };
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int near_limit = 0, cases = 0;
+  for (int i = 0; i < 200000; ++i, ++cases) {
+    const double lag = i % 7 == 0 ? 1.0 : 0.5 * (unit(rng) + 1.0);
+    const double limit = i % 11 == 0 ? 0.0 : 0.05 * (unit(rng) + 1.0);
+    const Eigen::Vector2d v(unit(rng), unit(rng));
+    Eigen::Vector2d u(unit(rng), unit(rng));
+    if (i % 3 == 0 && limit > 0.0) {
+      // A change whose size is the limit to within a few parts in 1e12.
+      const Eigen::Vector2d direction = Eigen::Vector2d(unit(rng), unit(rng)).normalized();
+      u = v + direction * (limit * (1.0 + 4e-12 * unit(rng)) / lag);
+      ++near_limit;
+    }
+    if (i % 13 == 0) u = v;  // no change at all
+    const Eigen::Vector2d fast = core::velocity_change(v, u, lag, limit), reference = plain(v, u, lag, limit);
+    ASSERT_EQ(fast.x(), reference.x()) << i;
+    ASSERT_EQ(fast.y(), reference.y()) << i;
+  }
+  EXPECT_GT(near_limit, cases / 4);
 }
 
 }  // namespace
