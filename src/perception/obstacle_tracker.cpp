@@ -53,18 +53,24 @@ void ObstacleTracker::cluster_voxels(const std::vector<VoxelCloud::Voxel>& voxel
     while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];  // path halving
     return v;
   };
-  for (int v = 0; v < n; ++v)
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        const int* head = cluster_map_.find(CellMap::key(cluster_cell_x_[v] + dx, cluster_cell_y_[v] + dy));
-        for (int u = head ? *head : -1; u != -1; u = next_in_cell_[u]) {
-          if (u <= v) continue;  // each pair once
-          const double ex = voxels[u].x - voxels[v].x, ey = voxels[u].y - voxels[v].y;
-          if (ex * ex + ey * ey > reach * reach) continue;
-          const int a = root(u), b = root(v);
-          if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-        }
-      }
+  // Each pair of voxels once: within a cell, v with those before it in the cell's list (smaller indices);
+  // across cells, v's cell with the four neighbours ahead of it (the other four see v's cell ahead of them).
+  // Every union makes the smaller root the root, so the roots (each cluster's smallest index), and the
+  // clusters below, do not depend on the order of the unions.
+  const auto join = [&](int u, int v) {
+    const double ex = voxels[u].x - voxels[v].x, ey = voxels[u].y - voxels[v].y;
+    if (ex * ex + ey * ey > reach * reach) return;
+    const int a = root(u), b = root(v);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  };
+  static constexpr std::int64_t kAhead[4][2] = {{1, -1}, {1, 0}, {1, 1}, {0, 1}};
+  for (int v = 0; v < n; ++v) {
+    for (int u = next_in_cell_[v]; u != -1; u = next_in_cell_[u]) join(u, v);
+    for (const auto& offset : kAhead) {
+      const int* head = cluster_map_.find(CellMap::key(cluster_cell_x_[v] + offset[0], cluster_cell_y_[v] + offset[1]));
+      for (int u = head ? *head : -1; u != -1; u = next_in_cell_[u]) join(u, v);
+    }
+  }
 
   // Number the clusters in beam order of their first voxel; accumulate their raw points and extent.
   root_cluster_.assign(voxels.size(), -1);
