@@ -105,7 +105,7 @@ class FreeSpace {
   bool full_circle_ = false;
   double angle_min_ = 0.0, increment_ = 0.0, range_max_ = 0.0;
   double nearest_ = 0.0, nearest_bearing_ = 0.0;
-  std::vector<double> sector_;  // free radius of sector k (between beams k and k+1), twice for wrap-around
+  std::vector<double> sector_;  // free radius of sector k (between beams k and k+1)
   std::vector<double> table_;   // sparse table of minima over sector_, level by level
   int levels_ = 0;
 };

@@ -39,10 +39,8 @@ void FreeSpace::build(const core::Scan& scan) {
   range_max_ = scan.range_max;
   full_circle_ = std::abs(n * increment_ - kTwoPi) <= 1e-6 * kTwoPi;
   const int sectors = full_circle_ ? n : n - 1;
-  // Sector k lies between beams k and k + 1 (beam n - 1 and beam 0 close the circle); twice over for a full
-  // circle, so that a window across the wrap-around is one contiguous range.
-  const int stored = full_circle_ ? 2 * sectors : sectors;
-  sector_.resize(static_cast<std::size_t>(stored));
+  // Sector k lies between beams k and k + 1 (beam n - 1 and beam 0 close the circle).
+  sector_.resize(static_cast<std::size_t>(sectors));
   nearest_ = INFINITY;
   for (int k = 0; k < sectors; ++k) {
     const double a = free_radius(scan.ranges[static_cast<std::size_t>(k)], range_max_);
@@ -53,27 +51,28 @@ void FreeSpace::build(const core::Scan& scan) {
       nearest_bearing_ = angle_min_ + (k + 0.5) * increment_;
     }
   }
-  if (full_circle_) std::copy_n(sector_.begin(), sectors, sector_.begin() + sectors);
-  // Sparse table: level j holds the minimum over 2^j consecutive sectors from each index.
+  // Sparse table over the sectors once (a window across the wrap-around is two queries): level j holds the
+  // minimum over 2^j consecutive sectors from each index.
   levels_ = 1;
-  while ((1 << levels_) <= stored) ++levels_;
-  table_.resize(static_cast<std::size_t>(levels_) * stored);
+  while ((1 << levels_) <= sectors) ++levels_;
+  table_.resize(static_cast<std::size_t>(levels_) * sectors);
   std::copy(sector_.begin(), sector_.end(), table_.begin());
   for (int j = 1; j < levels_; ++j) {
-    const double* below = table_.data() + static_cast<std::size_t>(j - 1) * stored;
-    double* level = table_.data() + static_cast<std::size_t>(j) * stored;
+    const double* below = table_.data() + static_cast<std::size_t>(j - 1) * sectors;
+    double* level = table_.data() + static_cast<std::size_t>(j) * sectors;
     const int half = 1 << (j - 1);
-    for (int i = 0; i < stored; ++i) level[i] = i + half < stored ? std::min(below[i], below[i + half]) : below[i];
+    for (int i = 0; i < sectors; ++i) level[i] = i + half < sectors ? std::min(below[i], below[i + half]) : below[i];
   }
   beams_ = n;
 }
 
 double FreeSpace::window_min(long lo, long hi) const {
-  const long stored = static_cast<long>(sector_.size());
+  const long sectors = full_circle_ ? beams_ : beams_ - 1;
+  if (hi >= sectors) return std::min(window_min(lo, sectors - 1), window_min(0, hi - sectors));  // wraps around
   const long length = hi - lo + 1;
   int j = 0;
   while ((2L << j) <= length) ++j;
-  const double* level = table_.data() + static_cast<std::size_t>(j) * stored;
+  const double* level = table_.data() + static_cast<std::size_t>(j) * sectors;
   return std::min(level[lo], level[hi - (1L << j) + 1]);
 }
 
