@@ -24,6 +24,7 @@ class Shielded final : public Planner {
       directions_.emplace_back(std::cos(angle), std::sin(angle));
     }
     memory_.reserve(kMemoryCapacity);
+    reach_.reserve(kMemoryCapacity);
   }
 
   /// The layer's own perception: velocity tracking, over many more points than the optimizer's 60 nearest. In
@@ -115,6 +116,12 @@ class Shielded final : public Planner {
         }
       }
       moving_.resize(kept);
+      // How far each object remembered from before this cycle could have come since (moved_lately).
+      reach_.clear();
+      for (std::size_t k = 0; k < fresh; ++k) {
+        const double reach = 0.2 + memory_[k].velocity.norm() * std::max(0.0, input.time - memory_[k].time);
+        reach_.push_back(reach * reach);
+      }
       for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
@@ -124,7 +131,7 @@ class Shielded final : public Planner {
         // clutter-dynamic-2ms, dynamic-a-3: a cylinder coming out from behind a box counted as still;
         // docs/safety.md). Either way moving with unknown heading (Certifier: a full disk at the fastest speed
         // seen this episode; none until something has been seen moving).
-        if (moved_lately(input.robot_position + position, input.time, fresh) ||
+        if (moved_lately(input.robot_position + position) ||
             (certifier_.settings().motion_evidence && fastest_moving_ > 0.0 && !evidence_.seen_before(position)))
           moving_.push_back({position, Eigen::Vector2d::Zero()});
       }
@@ -265,13 +272,12 @@ class Shielded final : public Planner {
     memory_.resize(kept);
   }
   /// True when a moving object was seen near `world` lately (before this cycle's, memory_[0, fresh)): within
-  /// 0.2 m of the box of its points plus what it could have moved since.
-  bool moved_lately(const Eigen::Vector2d& world, double time, std::size_t fresh) const {
-    for (std::size_t k = 0; k < fresh; ++k) {
+  /// 0.2 m of the box of its points plus what it could have moved since (reach_, squared).
+  bool moved_lately(const Eigen::Vector2d& world) const {
+    for (std::size_t k = 0; k < reach_.size(); ++k) {
       const Seen& m = memory_[k];
-      const double reach = 0.2 + m.velocity.norm() * std::max(0.0, time - m.time);
       const Eigen::Vector2d outside = (m.lo - world).cwiseMax(world - m.hi).cwiseMax(0.0);
-      if (outside.squaredNorm() < reach * reach) return true;
+      if (outside.squaredNorm() < reach_[k]) return true;
     }
     return false;
   }
@@ -315,6 +321,7 @@ class Shielded final : public Planner {
     bool shown = false;  // taken for moving by the LiDAR's own evidence (moved or unknown)
   };
   std::vector<Seen> memory_;
+  std::vector<double> reach_;  // this cycle's, per object of memory_ before it: squared reach (moved_lately)
   static constexpr double kMovingMemory = 0.5;      // s
   static constexpr std::size_t kMemoryCapacity = 512;  // objects over the last second
 
