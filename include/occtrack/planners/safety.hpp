@@ -100,6 +100,8 @@ class FreeSpace {
   bool disk_free(const Eigen::Vector2d& p, double clearance, const double* bearing) const;  // computed if null
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
   double window_min(long lo, long hi) const;
+  /// Sector k lies between beams k and k + 1; over a full circle, beam n - 1 and beam 0 close one more.
+  int sectors() const { return full_circle_ ? beams_ : beams_ - 1; }
 
   int beams_ = 0;
   bool full_circle_ = false;

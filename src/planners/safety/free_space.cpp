@@ -67,7 +67,7 @@ void FreeSpace::build(const core::Scan& scan) {
 }
 
 double FreeSpace::window_min(long lo, long hi) const {
-  const long sectors = full_circle_ ? beams_ : beams_ - 1;
+  const long sectors = this->sectors();
   if (hi >= sectors) return std::min(window_min(lo, sectors - 1), window_min(0, hi - sectors));  // wraps around
   const long length = hi - lo + 1;
   int j = 0;
@@ -78,7 +78,7 @@ double FreeSpace::window_min(long lo, long hi) const {
 
 bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const double* given_bearing) const {
   if (beams_ == 0 || !p.allFinite() || !(clearance >= 0.0) || !std::isfinite(clearance)) return false;
-  const int sectors = full_circle_ ? beams_ : beams_ - 1;
+  const int sectors = this->sectors();
   const double d = p.norm();
   // Inside the circle every sector reaches (the nearest return's range): free, without the angles.
   if (full_circle_ && d + clearance <= nearest_) return true;
@@ -117,7 +117,7 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const doub
 }
 
 bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, double u, double half_width) const {
-  const int sectors = full_circle_ ? beams_ : beams_ - 1;
+  const int sectors = this->sectors();
   const double period = full_circle_ ? static_cast<double>(beams_) : INFINITY;
   long lo = 0, hi = sectors - 1;
   if (std::isfinite(half_width)) {

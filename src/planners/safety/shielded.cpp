@@ -84,6 +84,13 @@ class Shielded final : public Planner {
       const auto& nearest = observation_.nearest;
       forget_before(input.time - kMovingMemory);
       const std::size_t fresh = memory_.size();  // this cycle's objects go after the remembered ones
+      // How far each remembered object could have come since it was seen (squared; memory_[0, fresh) stays as
+      // it is through this cycle: memorize() only changes or adds this cycle's objects after it).
+      reach_.clear();
+      for (std::size_t k = 0; k < fresh; ++k) {
+        const double reach = 0.2 + memory_[k].velocity.norm() * std::max(0.0, input.time - memory_[k].time);
+        reach_.push_back(reach * reach);
+      }
       // With fewer voxel points than rows, perception pads with copies of the nearest point (row 0): one point,
       // which must not outweigh the rest of its object when MotionEvidence counts points on a surface.
       const Eigen::Index rows = distinct_rows(nearest);
@@ -105,7 +112,7 @@ class Shielded final : public Planner {
                                                     ? evidence_.judge(&moving_[first], last - first)
                                                     : MotionEvidence::Verdict::unknown;
         if (verdict == MotionEvidence::Verdict::still &&
-            !shown_moving_lately(input.robot_position, &moving_[first], last - first, input.time, fresh))
+            !shown_moving_lately(input.robot_position, &moving_[first], last - first))
           continue;
         const Eigen::Vector2d velocity = moving_[first].velocity;
         fastest_moving_ = std::max(fastest_moving_, velocity.norm());
@@ -116,12 +123,6 @@ class Shielded final : public Planner {
         }
       }
       moving_.resize(kept);
-      // How far each object remembered from before this cycle could have come since (moved_lately).
-      reach_.clear();
-      for (std::size_t k = 0; k < fresh; ++k) {
-        const double reach = 0.2 + memory_[k].velocity.norm() * std::max(0.0, input.time - memory_[k].time);
-        reach_.push_back(reach * reach);
-      }
       for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
@@ -283,17 +284,15 @@ class Shielded final : public Planner {
   }
 
   /// True when an object taken for moving in the last 0.5 s (before this cycle, memory_[0, fresh)) was
-  /// within 0.2 m, plus what it could have moved since, of one of `points` (robot-centric).
-  bool shown_moving_lately(const Eigen::Vector2d& robot, const MovingPoint* points, std::size_t count, double time,
-                           std::size_t fresh) const {
-    for (std::size_t k = 0; k < fresh; ++k) {
+  /// within 0.2 m, plus what it could have moved since (reach_, squared), of one of `points` (robot-centric).
+  bool shown_moving_lately(const Eigen::Vector2d& robot, const MovingPoint* points, std::size_t count) const {
+    for (std::size_t k = 0; k < reach_.size(); ++k) {
       const Seen& m = memory_[k];
       if (!m.shown) continue;
-      const double reach = 0.2 + m.velocity.norm() * std::max(0.0, time - m.time);
       for (std::size_t i = 0; i < count; ++i) {
         const Eigen::Vector2d world = robot + points[i].position;
         const Eigen::Vector2d outside = (m.lo - world).cwiseMax(world - m.hi).cwiseMax(0.0);
-        if (outside.squaredNorm() < reach * reach) return true;
+        if (outside.squaredNorm() < reach_[k]) return true;
       }
     }
     return false;
@@ -321,7 +320,7 @@ class Shielded final : public Planner {
     bool shown = false;  // taken for moving by the LiDAR's own evidence (moved or unknown)
   };
   std::vector<Seen> memory_;
-  std::vector<double> reach_;  // this cycle's, per object of memory_ before it: squared reach (moved_lately)
+  std::vector<double> reach_;  // this cycle's, per object of memory_ before it: its squared reach
   static constexpr double kMovingMemory = 0.5;      // s
   static constexpr std::size_t kMemoryCapacity = 512;  // objects over the last second
 
