@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "occtrack/io/scenario.hpp"
+#include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/planners/safety.hpp"
 #include "occtrack/sim/episode.hpp"
@@ -817,6 +818,61 @@ TEST(ShieldEpisode, ShippedCvaeWithThePredictorKeepsClearOfSlidingWalls) {
   EXPECT_GT(m.min_clearance_m, 0.0);
   EXPECT_EQ(m.shield.total(), m.cycles);
   EXPECT_GT(m.shield.plan, m.cycles / 2) << "the layer should mostly send the policy's own plan";
+}
+
+TEST(SharedPerception, APlannerPlansOnTheLayersPerceptionAsOnItsOwn) {
+  // The safety layer perceives each scan once and offers it to the planner (PlannerInput::perceived). A
+  // planner that perceives as the layer does but for fewer nearest points must plan exactly as on its own
+  // perception, through the tracks' history: walls that slide, 50 cycles, the same scans for both twins.
+  core::Scenario scenario =
+      io::read_scenario(OCCTRACK_TEST_DATA_DIR "/../../scenarios/sixwall-dynamic-1.5ms-smoke/six-wall-sliding-1.yaml");
+  sim::World world(scenario);
+  std::mt19937_64 rng(7);
+  perception::Settings layer = perception::Settings::tracking();
+  layer.nearest_count = 400;
+  perception::Settings other = layer;
+  other.voxel_size = 0.25;  // a perception the planner cannot use
+  for (const char* name : {"cvae", "projcem"}) {
+    planners::PlannerOptions options;
+    options.samples = 48;
+    auto own = planners::make_planner(name, options), shared = planners::make_planner(name, options),
+         offered = planners::make_planner(name, options);
+    perception::Perception perceive(layer), perceive_other(other);
+    perception::Observation seen, seen_other;
+    Vec2 robot = scenario.robot_position;
+    int moving_rows = 0;
+    for (int k = 0; k < 50; ++k) {
+      planners::PlannerInput input;
+      input.time = 0.05 * k;
+      input.robot_position = robot;
+      input.target_position = world.target_position(input.time);
+      input.target_velocity = world.target_velocity(input.time);
+      const core::Scan scan = world.scan(robot, input.time, rng);
+      input.scan = &scan;
+      ASSERT_TRUE(perceive.process(scan, robot, seen));
+      ASSERT_TRUE(perceive_other.process(scan, robot, seen_other));
+      for (Eigen::Index i = 0; i < seen.nearest.rows(); ++i) moving_rows += seen.nearest.row(i).tail<2>().squaredNorm() > 0;
+
+      const planners::PlannerOutput a = own->plan(input);
+      planners::SharedPerception by_layer{&layer, &seen, 0.5, false};
+      input.perceived = &by_layer;
+      const planners::PlannerOutput b = shared->plan(input);
+      planners::SharedPerception unusable{&other, &seen_other, 0.5, false};
+      input.perceived = &unusable;
+      const planners::PlannerOutput c = offered->plan(input);
+
+      ASSERT_TRUE(a.ok && b.ok && c.ok) << name << ", cycle " << k;
+      EXPECT_TRUE(by_layer.used) << name << ", cycle " << k;
+      EXPECT_FALSE(unusable.used) << name << ", cycle " << k;
+      EXPECT_EQ(a.command_velocity, b.command_velocity) << name << ", cycle " << k;
+      EXPECT_EQ(a.command_velocity, c.command_velocity) << name << ", cycle " << k;
+      EXPECT_EQ(own->last_record().frame.nearest, shared->last_record().frame.nearest) << name << ", cycle " << k;
+      EXPECT_EQ(own->last_record().frame.occluders_view(), shared->last_record().frame.occluders_view()) << name;
+      EXPECT_GE(b.compute_ms, 0.5) << "the shared perception's time is the planner's";
+      robot += 0.05 * a.command_velocity;
+    }
+    EXPECT_GT(moving_rows, 100) << "the walls must show as moving, or the tracks are not compared";
+  }
 }
 
 }  // namespace

@@ -7,6 +7,14 @@
 
 namespace occtrack::planners::detail {
 
+namespace {
+/// True when perceiving with `a` and with `b` gives the same observation but for the nearest points' count.
+bool same_but_nearest(perception::Settings a, const perception::Settings& b) {
+  a.nearest_count = b.nearest_count;
+  return a == b;
+}
+}  // namespace
+
 bool validate_cycle(const projection::Settings& projection, const perception::Settings* perception,
                     const RankingSettings& ranking, double response_time, std::string* error) {
   std::string why;
@@ -71,7 +79,7 @@ Context::Context(const projection::Settings& projection, const perception::Setti
   least_squares_ = basis().P.completeOrthogonalDecomposition().pseudoInverse();
 }
 
-bool Context::observe(const PlannerInput& input, Frame& frame, std::string* error) {
+bool Context::observe(const PlannerInput& input, Frame& frame, CycleClock& clock, std::string* error) {
   auto fail = [&](const std::string& message) {
     if (error) *error = message;
     return false;
@@ -82,7 +90,21 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
   if (!input.target_position.allFinite() || !input.target_velocity.allFinite())
     return fail("planner input: target state is not finite");
   if (!(input.target_age >= 0.0)) return fail("planner input: target age is negative or not a number");
-  if (!perception_.process(*input.scan, input.robot_position, observation_, error)) return false;
+  // The observation: the one perceived for this cycle already, when made with this planner's settings but
+  // for more nearest points (its first rows are then those this planner's perception would give: one sorted
+  // list, perception.hpp); else this planner's own.
+  const perception::Settings& own = perception_.settings();
+  const perception::Observation* seen = &observation_;
+  if (SharedPerception* shared = input.perceived;
+      shared != nullptr && shared->settings != nullptr && shared->observation != nullptr &&
+      shared->settings->nearest_count >= own.nearest_count && shared->observation->nearest.rows() >= own.nearest_count &&
+      same_but_nearest(*shared->settings, own)) {
+    seen = shared->observation;
+    shared->used = true;
+    clock.credit(shared->ms);
+  } else if (!perception_.process(*input.scan, input.robot_position, observation_, error)) {
+    return false;
+  }
 
   frame.time = input.time;
   frame.origin = input.robot_position;
@@ -106,17 +128,17 @@ bool Context::observe(const PlannerInput& input, Frame& frame, std::string* erro
     // A hidden target's last estimate, carried forward at constant velocity (the v1 case, age 0, is untouched).
     frame.target.head<2>() += input.target_velocity * carried;
   }
-  frame.nearest = observation_.nearest;
-  frame.cloud = observation_.cloud;
+  frame.nearest = seen->nearest.topRows(own.nearest_count);
+  frame.cloud = seen->cloud;
   frame.scan = input.scan;
   // Occluders: the nearest points (with velocity estimates), then the rest of the distinct cloud points.
   // The storage keeps the cloud's size (no reallocation from one cycle to the next).
-  const int distinct = std::min<int>(observation_.voxels, static_cast<int>(observation_.cloud.rows()));
-  const int near = std::min<int>(distinct, static_cast<int>(observation_.nearest.rows()));
-  if (frame.occluders.rows() < observation_.cloud.rows()) frame.occluders.resize(observation_.cloud.rows(), 4);
+  const int distinct = std::min<int>(seen->voxels, static_cast<int>(seen->cloud.rows()));
+  const int near = std::min<int>(distinct, own.nearest_count);
+  if (frame.occluders.rows() < seen->cloud.rows()) frame.occluders.resize(seen->cloud.rows(), 4);
   frame.occluder_count = distinct;
-  frame.occluders.topRows(near) = observation_.nearest.topRows(near);
-  for (int i = near; i < distinct; ++i) frame.occluders.row(i) << observation_.cloud(i, 0), observation_.cloud(i, 1), 0, 0;
+  frame.occluders.topRows(near) = seen->nearest.topRows(near);
+  for (int i = near; i < distinct; ++i) frame.occluders.row(i) << seen->cloud(i, 0), seen->cloud(i, 1), 0, 0;
   return true;
 }
 

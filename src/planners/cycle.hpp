@@ -50,6 +50,12 @@ class CycleClock {
   using Clock = std::chrono::steady_clock;
   CycleClock() : start_(Clock::now()) {}
   double elapsed_ms() const { return ms_since(start_); }
+  /// When the cycle started: construction, less any time credited.
+  Clock::time_point start() const { return start_; }
+  /// Counts `ms` more to the cycle, work done for it before construction (a shared perception).
+  void credit(double ms) {
+    if (ms > 0.0) start_ -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(ms));
+  }
   static double ms_since(Clock::time_point t) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
   }
@@ -107,10 +113,11 @@ class Context {
   }
 
   /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state, a
-  /// negative or NaN target age). A target estimate of age a > 0 (hidden target, Protocol v2) is predicted
+  /// negative or NaN target age). Perception is input.perceived's when it fits this planner's settings
+  /// (PlannerInput): then its time is credited to `clock`. A target estimate of age a > 0 (hidden target, Protocol v2) is predicted
   /// over min(a, kMaxTargetPrediction), at constant velocity or, with RankingSettings::predict_target, by the
   /// target predictor, which then also fills frame.forecast; the planners plan on that prediction.
-  bool observe(const PlannerInput& input, Frame& frame, std::string* error);
+  bool observe(const PlannerInput& input, Frame& frame, CycleClock& clock, std::string* error);
 
   /// The end of a cycle that chose `xi` (robot-centric in record.frame) with ranking `terms`: out's command
   /// and world plan (candidates are left as they are), out.ok, the record, and finish(). xi may alias

@@ -33,12 +33,12 @@ void Follower::reset() {
 const PlanRecord& Follower::last_record() const { return impl_->record; }
 
 void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
-  const detail::CycleClock clock;
+  detail::CycleClock clock;
   auto& s = *impl_;
   Frame& frame = s.record.frame;
   std::string error;
   if (detail::hold_unobserved(input, out, s.record, clock)) return;
-  if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
+  if (!s.context.observe(input, frame, clock, &error)) return detail::brake(out, s.record, clock, error);
   s.context.line_to_goal(frame, s.line);
   const Eigen::Vector2d terminal_velocity = frame.target.tail<2>();
   s.context.fill_row(s.optimizer.problem, 0, s.line, frame, &terminal_velocity);

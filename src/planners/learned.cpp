@@ -205,8 +205,7 @@ const LearnedPolicy::Choice& LearnedPolicy::last_choice() const { return impl_->
 const PlanRecord& LearnedPolicy::last_record() const { return impl_->record; }
 
 void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
-  const detail::CycleClock clock;
-  const auto start = Clock::now();
+  detail::CycleClock clock;
   Impl& s = *impl_;
   const LearnedPolicySettings& cfg = s.settings;
   const bool project = cfg.variant != policy::Variant::bc;
@@ -231,9 +230,9 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
     s.timing.total = out.compute_ms;
     return;
   }
-  if (!s.context.observe(input, s.record.frame, &error)) return brake(error);
+  if (!s.context.observe(input, s.record.frame, clock, &error)) return brake(error);
   const auto observed = Clock::now();
-  s.timing.perception = ms_between(start, observed);
+  s.timing.perception = ms_between(clock.start(), observed);  // with a shared perception's time (credited)
 
   // 2. PointNet on the distinct points: the cloud's rows past them repeat its first row, which changes no
   //    max-pooled feature (perception.hpp, fixed cloud).

@@ -86,13 +86,13 @@ void ProjCem::reset() {
 const PlanRecord& ProjCem::last_record() const { return impl_->record; }
 
 void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
-  const detail::CycleClock clock;
+  detail::CycleClock clock;
   auto& s = *impl_;
   const auto& cfg = s.settings;
   Frame& frame = s.record.frame;
   std::string error;
   if (detail::hold_unobserved(input, out, s.record, clock)) return;
-  if (!s.context.observe(input, frame, &error)) return detail::brake(out, s.record, clock, error);
+  if (!s.context.observe(input, frame, clock, &error)) return detail::brake(out, s.record, clock, error);
   const int n = cfg.projection.coefficients(), B = cfg.samples;
   s.context.line_to_goal(frame, s.line);
 

@@ -14,9 +14,26 @@
 #include "occtrack/core/scenario.hpp"
 #include "occtrack/planners/ranking.hpp"
 
+namespace occtrack::perception {
+struct Settings;
+struct Observation;
+}  // namespace occtrack::perception
+
 namespace occtrack::planners {
 
 using core::Vec2;
+
+/// Perception of a cycle's scan already run by a wrapper around the planner (the safety layer,
+/// planners/safety.hpp), so that the scan is perceived once a cycle rather than once by each. A planner whose
+/// perception settings equal `settings` but for a smaller or equal nearest_count uses `observation` (its own
+/// nearest_count first rows) instead of perceiving, adds `ms` to its cycle's time (its perception took that
+/// long) and sets `used`; any other planner ignores it. Valid during the cycle only.
+struct SharedPerception {
+  const perception::Settings* settings = nullptr;
+  const perception::Observation* observation = nullptr;
+  double ms = 0.0;    ///< what perceiving took
+  bool used = false;  ///< set by the planner that used it
+};
 
 struct PlannerInput {
   double time = 0.0;
@@ -29,6 +46,7 @@ struct PlannerInput {
   /// target has never been observed (the position and velocity then mean nothing and a planner holds still).
   double target_age = 0.0;
   const core::Scan* scan = nullptr;     ///< the latest scan; must not be null
+  SharedPerception* perceived = nullptr;  ///< the scan already perceived, when a wrapper did (else null)
 };
 
 /// What the safety layer did with a cycle's command (planners/safety.hpp; the metrics count each).

@@ -61,12 +61,29 @@ class Shielded final : public Planner {
   }
   const PlanRecord& last_record() const override { return inner_->last_record(); }
 
+  /// The scan is perceived first, and the perception offered to the planner (PlannerInput::perceived): a
+  /// planner that perceives as the layer does, but for fewer nearest points, then perceives no more itself, and
+  /// counts that time as its own perception's.
   void plan(const PlannerInput& input, PlannerOutput& out) override {
+    using Clock = std::chrono::steady_clock;
+    const auto ms = [](Clock::time_point a, Clock::time_point b) {
+      return std::chrono::duration<double, std::milli>(b - a).count();
+    };
     out.ranked_commands.clear();
-    inner_->plan(input, out);
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = Clock::now();
+    const bool usable = input.scan != nullptr && input.robot_position.allFinite() && input.robot_velocity.allFinite();
+    if (usable && certifier_.settings().motion_evidence)
+      evidence_.add(*input.scan, input.robot_position, input.time);
+    const auto added = Clock::now();
+    observed_ = usable && perception_.process(*input.scan, input.robot_position, observation_, nullptr);
+    const auto perceived = Clock::now();
+    shared_ = SharedPerception{&perception_.settings(), &observation_, ms(added, perceived), false};
+    PlannerInput passed = input;
+    passed.perceived = observed_ ? &shared_ : nullptr;
+    inner_->plan(passed, out);
+    const auto resume = Clock::now();
     choose(input, out);
-    out.compute_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    out.compute_ms += ms(start, added) + (shared_.used ? 0.0 : shared_.ms) + ms(resume, Clock::now());
   }
 
  private:
@@ -79,8 +96,7 @@ class Shielded final : public Planner {
       return;  // nothing to certify against: full brake
     }
     moving_.clear();
-    if (certifier_.settings().motion_evidence) evidence_.add(*input.scan, input.robot_position, input.time);
-    if (perception_.process(*input.scan, input.robot_position, observation_, nullptr)) {
+    if (observed_) {  // this cycle's perception (plan())
       const auto& nearest = observation_.nearest;
       forget_before(input.time - kMovingMemory);
       const std::size_t fresh = memory_.size();  // this cycle's objects go after the remembered ones
@@ -307,6 +323,8 @@ class Shielded final : public Planner {
   Certifier certifier_;
   perception::Perception perception_;
   perception::Observation observation_;
+  bool observed_ = false;    // observation_ is this cycle's
+  SharedPerception shared_;  // observation_, as offered to the planner
   MotionEvidence evidence_;
   std::vector<MovingPoint> moving_;
   Eigen::Vector2d previous_ = Eigen::Vector2d::Zero();
