@@ -255,6 +255,8 @@ class MotionEvidence {
     double time = -INFINITY;
   };
   void fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time);
+  /// add() but for earlier_: the scan as current_, and into the history when it is due.
+  void keep(const core::Scan& scan, const Eigen::Vector2d& robot, double time);
   /// `bearing`: that of world - frame.robot, std::atan2 of its y and x.
   bool on_surface(const Frame& frame, const Eigen::Vector2d& world, double bearing) const;
   const Frame* older_than(double age) const;
@@ -265,6 +267,7 @@ class MotionEvidence {
   Frame current_;
   std::vector<Frame> history_;  // ring, oldest overwritten; time -infinity: an empty slot
   std::size_t next_ = 0;
+  int earlier_[2] = {-1, -1};  // of the current scan: older_than(baselines[b]), a slot of history_ (-1: none)
 };
 
 /// Wraps `inner` with the safety layer. The wrapper keeps the inner planner's name; its use_prior() takes the

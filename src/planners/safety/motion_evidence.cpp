@@ -27,6 +27,7 @@ void MotionEvidence::reset() {
   for (Frame& f : history_) f.time = -INFINITY;  // storage kept for the next episode
   next_ = 0;
   current_.time = -INFINITY;
+  earlier_[0] = earlier_[1] = -1;
 }
 
 void MotionEvidence::fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time) {
@@ -58,6 +59,15 @@ void MotionEvidence::fill(Frame& frame, const core::Scan& scan, const Eigen::Vec
 }
 
 void MotionEvidence::add(const core::Scan& scan, const Eigen::Vector2d& robot, double time) {
+  keep(scan, robot, time);
+  // The scans each baseline compares with, found once for every judge() and seen_before() of this scan.
+  for (int b = 0; b < 2; ++b) {
+    const Frame* f = std::isfinite(current_.time) ? older_than(options_.baselines[b]) : nullptr;
+    earlier_[b] = f == nullptr ? -1 : static_cast<int>(f - history_.data());
+  }
+}
+
+void MotionEvidence::keep(const core::Scan& scan, const Eigen::Vector2d& robot, double time) {
   if (!(time >= current_.time)) reset();  // time ran backwards: another episode
   fill(current_, scan, robot, time);
   if (!robot.allFinite() || !std::isfinite(time)) {
@@ -120,8 +130,8 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
   if (!std::isfinite(radius)) return Verdict::unknown;
   const double tol = options_.tolerance;
   bool still = true;
-  for (const double baseline : options_.baselines) {
-    const Frame* earlier = older_than(baseline);
+  for (const int slot : earlier_) {
+    const Frame* earlier = slot < 0 ? nullptr : &history_[static_cast<std::size_t>(slot)];
     if (earlier == nullptr) {
       still = false;
       continue;
@@ -168,8 +178,8 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
 
 bool MotionEvidence::seen_before(const Eigen::Vector2d& point) const {
   if (!std::isfinite(current_.time) || !point.allFinite()) return false;
-  const Frame* earlier = older_than(options_.baselines[0]);
-  if (earlier == nullptr) return false;
+  if (earlier_[0] < 0) return false;
+  const Frame* earlier = &history_[static_cast<std::size_t>(earlier_[0])];
   const Eigen::Vector2d world = current_.robot + point, q = world - earlier->robot;
   return on_surface(*earlier, world, std::atan2(q.y(), q.x()));
 }
