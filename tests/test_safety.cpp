@@ -851,7 +851,8 @@ TEST(SharedPerception, APlannerPlansOnTheLayersPerceptionAsOnItsOwn) {
       input.scan = &scan;
       ASSERT_TRUE(perceive.process(scan, robot, seen));
       ASSERT_TRUE(perceive_other.process(scan, robot, seen_other));
-      for (Eigen::Index i = 0; i < seen.nearest.rows(); ++i) moving_rows += seen.nearest.row(i).tail<2>().squaredNorm() > 0;
+      for (Eigen::Index i = 0; i < seen.nearest.rows(); ++i)
+        moving_rows += seen.nearest.row(i).tail<2>().squaredNorm() > 0.0;
 
       const planners::PlannerOutput a = own->plan(input);
       planners::SharedPerception by_layer{&layer, &seen, 0.5, false};

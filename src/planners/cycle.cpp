@@ -97,8 +97,8 @@ bool Context::observe(const PlannerInput& input, Frame& frame, CycleClock& clock
   const perception::Observation* seen = &observation_;
   if (SharedPerception* shared = input.perceived;
       shared != nullptr && shared->settings != nullptr && shared->observation != nullptr &&
-      shared->settings->nearest_count >= own.nearest_count && shared->observation->nearest.rows() >= own.nearest_count &&
-      same_but_nearest(*shared->settings, own)) {
+      shared->settings->nearest_count >= own.nearest_count &&
+      shared->observation->nearest.rows() >= own.nearest_count && same_but_nearest(*shared->settings, own)) {
     seen = shared->observation;
     shared->used = true;
     clock.credit(shared->ms);

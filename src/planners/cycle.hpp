@@ -114,8 +114,8 @@ class Context {
 
   /// Perception and frame change. False, with *error, on unusable input (null scan, non-finite state, a
   /// negative or NaN target age). Perception is input.perceived's when it fits this planner's settings
-  /// (PlannerInput): then its time is credited to `clock`. A target estimate of age a > 0 (hidden target, Protocol v2) is predicted
-  /// over min(a, kMaxTargetPrediction), at constant velocity or, with RankingSettings::predict_target, by the
+  /// (PlannerInput): then its time is credited to `clock`. A target estimate of age a > 0 (hidden target,
+  /// Protocol v2) is predicted over min(a, kMaxTargetPrediction), at constant velocity or, with RankingSettings::predict_target, by the
   /// target predictor, which then also fills frame.forecast; the planners plan on that prediction.
   bool observe(const PlannerInput& input, Frame& frame, CycleClock& clock, std::string* error);
 
