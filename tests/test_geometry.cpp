@@ -54,6 +54,33 @@ TEST(PlaneGeometry, SegmentSegmentDistance) {
   EXPECT_NEAR(core::segment_segment_distance(Vec2(0, 0), Vec2(4, 0), Vec2(2, 1), Vec2(2, 3)), 1.0, kTol);  // T shape
 }
 
+TEST(PlaneGeometry, RootBelowAnswersAsComparingTheRoot) {
+  // Squares at and a few units in the last place around limit^2 (where the rounded root and the limit meet),
+  // random ones well away from it, and the odd values.
+  constexpr double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<double> limits = {0.0, 1e-300, 0.08, 0.6, 1.0, 3.0, 1e150, inf, nan, -0.5, -0.0};
+  for (int i = 0; i < 2000; ++i) limits.push_back(std::pow(10.0, 12.0 * unit(rng) - 6.0));
+  int cases = 0, mismatches = 0;
+  for (const double limit : limits) {
+    std::vector<double> squares = {0.0, -0.0, 1e-320, inf, nan};  // squares: never below zero
+    double s = limit * limit;
+    for (int k = 0; k < 8; ++k) s = std::nextafter(s, 0.0);
+    for (int k = 0; k < 16; ++k, s = std::nextafter(s, inf)) squares.push_back(s);
+    for (int k = 0; k < 20; ++k) squares.push_back(limit * limit * (1.0 + 1e-8 * (2.0 * unit(rng) - 1.0)));
+    for (int k = 0; k < 20; ++k) squares.push_back(limit * limit * 4.0 * unit(rng));
+    for (const double sq : squares) {
+      const bool root = std::sqrt(sq) < limit;
+      mismatches += core::root_below(sq, limit) != root;
+      // Where it says so, the root is below the limit.
+      if (core::root_clearly_below(sq, limit)) mismatches += !root;
+      ++cases;
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << cases;
+}
+
 TEST(ShapeGeometry, ShapeOfAnObstacle) {
   ObstacleSpec c;
   c.shape = ObstacleSpec::Shape::circle;

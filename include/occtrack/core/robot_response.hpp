@@ -27,11 +27,10 @@ inline Vec2 velocity_change(const Vec2& velocity, const Vec2& command, double la
   Vec2 change = command - velocity;
   change *= lag;  // exactly the change itself when lag is 1 (no lag)
   const double squared = change.squaredNorm();
-  // Well inside the limit, no square root: below limit^2 (1 - 1e-9) the rounded root lies below the limit too
-  // (the rounded root is monotone), so the answer is the one comparing the root gives. The root sat on the
-  // chain of dependent operations of each step (the certifier integrates hundreds of steps per manoeuvre),
-  // and the limit binds only early in a manoeuvre.
-  if (limit >= 0.0 && squared < limit * limit * (1.0 - 1e-9)) return change;
+  // Well inside the limit, no square root (root_clearly_below): the answer comparing the root gives. The root
+  // sat on the chain of dependent operations of each step (the certifier integrates hundreds of steps per
+  // manoeuvre), and the limit binds only early in a manoeuvre.
+  if (root_clearly_below(squared, limit)) return change;
   const double size = std::sqrt(squared);  // change.norm()
   if (size > limit) change *= limit / size;
   return change;
