@@ -17,6 +17,7 @@
 #include "occtrack/planners/safety.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/world.hpp"
+#include "planners/safety/bearing.hpp"
 #include "test_helpers.hpp"
 
 namespace occtrack {
@@ -194,6 +195,97 @@ TEST(FreeSpace, FastPathsAgreeWithAPlainSectorBySectorTest) {
   }
   EXPECT_EQ(mismatches, 0);
   // Both answers occur often enough for the comparison to mean something.
+  EXPECT_GT(free_count, queries / 10);
+  EXPECT_LT(free_count, queries * 9 / 10);
+}
+
+// The free-space test and the motion evidence look bearings up on a rough atan2 (planners/safety/bearing.hpp)
+// where that is sure to give the exact answer, and on std::atan2 elsewhere.
+TEST(RoughBearing, StaysWithinItsStatedErrorOfAtan2) {
+  using planners::safety::detail::kRoughBearingError;
+  using planners::safety::detail::rough_bearing;
+  std::mt19937 rng(20261205);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worst = 0.0;
+  for (int i = 0; i < 2'000'000; ++i) {
+    const double angle = kPi * (2.0 * unit(rng) - 1.0), scale = std::pow(10.0, 6.0 * unit(rng) - 3.0);
+    const double x = scale * std::cos(angle), y = scale * std::sin(angle);
+    double gap = std::abs(rough_bearing(y, x) - std::atan2(y, x));
+    gap = std::min(gap, 2.0 * kPi - gap);  // across the jump at +-pi
+    worst = std::max(worst, gap);
+  }
+  // The axes and diagonals, where the polynomial's argument is 0 or 1, and atan2's signed zeros.
+  for (const double x : {-1.0, -0.0, 0.0, 1.0})
+    for (const double y : {-1.0, -0.0, 0.0, 1.0}) {
+      if (x == 0.0 && y == 0.0) continue;
+      EXPECT_NEAR(rough_bearing(y, x), std::atan2(y, x), kRoughBearingError) << x << ", " << y;
+    }
+  EXPECT_EQ(std::signbit(rough_bearing(-0.0, 1.0)), std::signbit(std::atan2(-0.0, 1.0)));
+  EXPECT_LT(worst, kRoughBearingError / 10.0) << worst;  // a tenth of what the callers allow for
+  EXPECT_TRUE(std::isnan(rough_bearing(0.0, 0.0)));
+  EXPECT_TRUE(std::isnan(rough_bearing(1.0, kInf)));
+  EXPECT_TRUE(std::isnan(rough_bearing(std::nan(""), 1.0)));
+  EXPECT_TRUE(std::isnan(rough_bearing(1.0, std::nan(""))));
+}
+
+TEST(RoughBearing, NearestBeamIsTheExactOneEvenAtMidpointsAndAtThePiJump) {
+  using planners::safety::detail::nearest_beam;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double nudges[] = {0.0, 1e-15, -1e-15, 1e-12, -1e-12, 1e-9, -1e-9, 1e-7, -1e-7, 1e-6, -1e-6, 3e-6, -3e-6,
+                           1e-5, -1e-5, 1e-3, -1e-3};
+  int mismatches = 0, checks = 0;
+  const auto check = [&](double angle, double angle_min, double increment) {
+    const double r = 0.1 + 8.0 * unit(rng), x = r * std::cos(angle), y = r * std::sin(angle);
+    mismatches += nearest_beam(y, x, angle_min, increment) != std::lround((std::atan2(y, x) - angle_min) / increment);
+    ++checks;
+  };
+  for (const double increment : {2.0 * kPi / 360.0, 2.0 * kPi / 90.0, 0.0043}) {
+    const double angle_min = 2.0 * kPi * unit(rng) - kPi;
+    for (int i = 0; i < 20'000; ++i) check(kPi * (2.0 * unit(rng) - 1.0), angle_min, increment);
+    for (int k = -800; k <= 800; ++k)  // midpoints between beams, as far as they lie within (-pi, pi]
+      for (const double nudge : nudges) check(angle_min + (k + 0.5) * increment + nudge, angle_min, increment);
+    for (const double nudge : nudges) check(kPi - std::abs(nudge), angle_min, increment);  // the jump
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << checks;
+}
+
+TEST(FreeSpace, TheRoughBearingDecidesAsTheExactOne) {
+  // disk_free without a bearing answers on the rough one where it can; with std::atan2's bearing given it
+  // takes the exact path. Disks centred on and near the sector edges and the wrap-around, where the rough
+  // bearing could name the wrong sector.
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double nudges[] = {0.0, 1e-13, -1e-13, 1e-9, -1e-9, 3e-7, -3e-7, 1e-6, -1e-6, 3e-6, -3e-6, 1e-4, -1e-4,
+                           0.3, -0.3};
+  int mismatches = 0, free_count = 0, queries = 0;
+  for (int trial = 0; trial < 9; ++trial) {
+    const int beams = trial % 3 == 0 ? 90 : 360;
+    const double base = 1.0 + 4.0 * unit(rng);
+    core::Scan scan = make_scan(
+        [&](double) {
+          const double kind = unit(rng);
+          if (kind < 0.05) return kInf;
+          if (kind < 0.07) return 0.0;
+          return base * (0.7 + 0.6 * unit(rng));
+        },
+        beams, 8.0);
+    scan.angle_min = 2.0 * kPi * unit(rng) - kPi;
+    if (trial % 3 == 2) scan.ranges.resize(static_cast<std::size_t>(beams * 3 / 4));  // a 270 degree view
+    FreeSpace free;
+    free.build(scan);
+    for (int k = -2; k <= beams + 1; ++k)
+      for (const double nudge : nudges)
+        for (int draw = 0; draw < 3; ++draw, ++queries) {
+          const double bearing = scan.angle_min + k * scan.angle_increment + nudge;
+          const double d = base * (0.05 + 1.3 * unit(rng)), c = 0.02 + 0.5 * unit(rng);
+          const Vec2 p = d * Vec2(std::cos(bearing), std::sin(bearing));
+          const bool rough = free.disk_free(p, c);
+          mismatches += rough != free.disk_free(p, c, std::atan2(p.y(), p.x()));
+          free_count += rough;
+        }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << queries;
   EXPECT_GT(free_count, queries / 10);
   EXPECT_LT(free_count, queries * 9 / 10);
 }

@@ -99,6 +99,8 @@ class FreeSpace {
  private:
   bool disk_free(const Eigen::Vector2d& p, double clearance, const double* bearing) const;  // computed if null
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
+  /// disk_free's fast answers (d > clearance) on a rough bearing: 1 free, 0 not, -1 unsure.
+  int rough_answer(const Eigen::Vector2d& p, double d, double clearance) const;
   double window_min(long lo, long hi) const;
   /// Sector k lies between beams k and k + 1; over a full circle, beam n - 1 and beam 0 close one more.
   int sectors() const { return full_circle_ ? beams_ : beams_ - 1; }
@@ -106,6 +108,7 @@ class FreeSpace {
   int beams_ = 0;
   bool full_circle_ = false;
   double angle_min_ = 0.0, increment_ = 0.0, range_max_ = 0.0;
+  double per_radian_ = 0.0;  // 1 / increment_, sectors per radian
   double nearest_ = 0.0, nearest_bearing_ = 0.0;
   std::vector<double> sector_;  // free radius of sector k (between beams k and k+1)
   std::vector<double> table_;   // sparse table of minima over sector_, level by level
@@ -257,8 +260,7 @@ class MotionEvidence {
   void fill(Frame& frame, const core::Scan& scan, const Eigen::Vector2d& robot, double time);
   /// add() but for earlier_: the scan as current_, and into the history when it is due.
   void keep(const core::Scan& scan, const Eigen::Vector2d& robot, double time);
-  /// `bearing`: that of world - frame.robot, std::atan2 of its y and x.
-  bool on_surface(const Frame& frame, const Eigen::Vector2d& world, double bearing) const;
+  bool on_surface(const Frame& frame, const Eigen::Vector2d& world) const;
   const Frame* older_than(double age) const;
 
   Options options_;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "occtrack/planners/safety.hpp"
+#include "bearing.hpp"
 
 namespace occtrack::planners::safety {
 
@@ -36,6 +37,7 @@ void FreeSpace::build(const core::Scan& scan) {
     return;  // nothing is known free
   angle_min_ = scan.angle_min;
   increment_ = scan.angle_increment;
+  per_radian_ = 1.0 / increment_;
   range_max_ = scan.range_max;
   full_circle_ = std::abs(n * increment_ - kTwoPi) <= 1e-6 * kTwoPi;
   const int sectors = full_circle_ ? n : n - 1;
@@ -82,6 +84,12 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const doub
   const double d = p.norm();
   // Inside the circle every sector reaches (the nearest return's range): free, without the angles.
   if (full_circle_ && d + clearance <= nearest_) return true;
+  // Without a bearing given, the two fast answers below first on a rough one (rough_answer), where it decides
+  // as the exact one would; else the exact bearing.
+  if (given_bearing == nullptr && d > clearance) {
+    const int answer = rough_answer(p, d, clearance);
+    if (answer >= 0) return answer == 1;
+  }
   // u: the centre's bearing in sector units from beam 0, in [0, 2 pi / increment).
   double bearing = (given_bearing != nullptr ? *given_bearing : std::atan2(p.y(), p.x())) - angle_min_;
   bearing -= kTwoPi * std::floor(bearing / kTwoPi);
@@ -114,6 +122,38 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const doub
   // Fast: every sector the disk crosses reaches beyond the disk's farthest point.
   if (window_min(lo, hi) >= d + clearance) return true;
   return exact(p, d, clearance, u, half_width);
+}
+
+int FreeSpace::rough_answer(const Eigen::Vector2d& p, double d, double clearance) const {
+  // The rough bearing, wrapped as disk_free wraps the exact one: sure of the wrap when at least twice its
+  // error from 0 and 2 pi (whatever the rounding of the subtraction and the wrap).
+  // Products with reciprocals stand in for the divisions: their rounding is far inside the slack.
+  double bearing = detail::rough_bearing(p.y(), p.x()) - angle_min_;
+  bearing -= kTwoPi * std::floor(bearing * (1.0 / kTwoPi));
+  const double error = 2.0 * detail::kRoughBearingError;
+  if (!(bearing >= error && bearing <= kTwoPi - error)) return -1;
+  const double u = bearing * per_radian_, slack = error * per_radian_;  // the exact u lies within slack of u
+  const int sectors = this->sectors();
+  // Fast false, as in disk_free: the own sector ends before the disk's farthest point.
+  long own = 0;
+  if (!detail::sure_floor(u, slack, &own)) return -1;
+  own %= sectors;
+  if (own < 0) own += sectors;
+  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return 0;
+  // Fast true, as in disk_free, over a window that holds disk_free's: its half-width from above (tan >= asin),
+  // widened by the slack either side.
+  const double x = clearance / d;  // in [0, 1)
+  const double half_width = x / std::sqrt((1.0 - x) * (1.0 + x)) * per_radian_ + 2.0 * slack;
+  if (!(half_width < 0.25 * sectors)) return -1;
+  long lo = static_cast<long>(std::floor(u - half_width)), hi = static_cast<long>(std::floor(u + half_width));
+  if (full_circle_) {
+    const long shift = lo < 0 ? sectors : (lo >= sectors ? -sectors : 0);
+    lo += shift;
+    hi += shift;
+  } else if (lo < 0 || hi > sectors - 1) {
+    return -1;  // disk_free's own window may still lie inside the field of view
+  }
+  return window_min(lo, hi) >= d + clearance ? 1 : -1;
 }
 
 bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, double u, double half_width) const {

@@ -2,7 +2,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "occtrack/core/geometry.hpp"
 #include "occtrack/planners/safety.hpp"
+#include "bearing.hpp"
 
 namespace occtrack::planners::safety {
 
@@ -12,11 +14,13 @@ constexpr std::size_t kHistory = 12;   // scans kept, one per kSpacing: the last
 constexpr double kSpacing = 0.1;       // s between kept scans
 constexpr double kSameSurface = 0.6;   // m: two adjacent returns closer than this are joined into a surface
 
-double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+/// The squared distance from p to the segment a-b (its root: core::point_segment_distance, which is built
+/// without contracted multiply-adds for the scenario generator; this one serves the layer's cycle).
+double segment_squared_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;
   const double length2 = ab.squaredNorm();
   const double t = length2 > 0.0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
+  return (a + t * ab - p).squaredNorm();
 }
 
 }  // namespace
@@ -97,11 +101,18 @@ const MotionEvidence::Frame* MotionEvidence::older_than(double age) const {
   return best;
 }
 
-bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world, double bearing) const {
+bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world) const {
   const long n = static_cast<long>(frame.returns.size());
   if (n == 0) return false;
-  const long centre = std::lround((bearing - frame.angle_min) / frame.increment);
-  for (long k = centre - 3; k <= centre + 2; ++k) {
+  // The beam nearest the point's bearing from where the frame was taken.
+  const Eigen::Vector2d q = world - frame.robot;
+  const long centre = detail::nearest_beam(q.y(), q.x(), frame.angle_min, frame.increment);
+  // The returns at beams centre - 3 .. centre + 2 and the segments from each to the next: any one the point
+  // lies on decides, so those beside the point's own beam, where a still point usually lies, go first. The
+  // distances are compared squared (core::root_below: the same answers as comparing the roots).
+  constexpr long kOrder[6] = {-1, 0, -2, 1, -3, 2};
+  for (const long offset : kOrder) {
+    const long k = centre + offset;
     long i = k, j = k + 1;
     if (frame.full_circle) {
       i = ((i % n) + n) % n;
@@ -110,10 +121,11 @@ bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world
     if (i < 0 || i >= n) continue;
     const Eigen::Vector2d& a = frame.returns[static_cast<std::size_t>(i)];
     if (!a.allFinite()) continue;
-    if ((a - world).norm() < options_.tolerance) return true;
+    if (core::root_below((a - world).squaredNorm(), options_.tolerance)) return true;
     if (j < 0 || j >= n) continue;
     const Eigen::Vector2d& b = frame.returns[static_cast<std::size_t>(j)];
-    if (b.allFinite() && (b - a).norm() < kSameSurface && segment_distance(world, a, b) < options_.tolerance)
+    if (b.allFinite() && core::root_below((b - a).squaredNorm(), kSameSurface) &&
+        core::root_below(segment_squared_distance(world, a, b), options_.tolerance))
       return true;
   }
   return false;
@@ -138,17 +150,12 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
     }
     // Something came: a point of the object where the earlier scan saw free space. The points on a surface
     // the earlier scan saw are counted only while the count can still decide (still, and half not yet reached
-    // but within reach); the point's bearing then serves both tests.
+    // but within reach).
     std::size_t seen = 0;
     for (std::size_t i = 0; i < count; ++i) {
-      const Eigen::Vector2d world = current_.robot + points[i].position, q = world - earlier->robot;
-      if (still && 2 * seen < count && 2 * (seen + count - i) >= count) {
-        const double bearing = std::atan2(q.y(), q.x());
-        if (earlier->free.disk_free(q, tol, bearing)) return Verdict::moved;
-        if (on_surface(*earlier, world, bearing)) ++seen;
-      } else if (earlier->free.disk_free(q, tol)) {
-        return Verdict::moved;
-      }
+      const Eigen::Vector2d world = current_.robot + points[i].position;
+      if (earlier->free.disk_free(world - earlier->robot, tol)) return Verdict::moved;
+      if (still && 2 * seen < count && 2 * (seen + count - i) >= count && on_surface(*earlier, world)) ++seen;
     }
     // Something left: an earlier return near the object where this scan sees free space.
     const double near = radius + options_.reach * (current_.time - earlier->time) + tol;
@@ -180,8 +187,7 @@ bool MotionEvidence::seen_before(const Eigen::Vector2d& point) const {
   if (!std::isfinite(current_.time) || !point.allFinite()) return false;
   if (earlier_[0] < 0) return false;
   const Frame* earlier = &history_[static_cast<std::size_t>(earlier_[0])];
-  const Eigen::Vector2d world = current_.robot + point, q = world - earlier->robot;
-  return on_surface(*earlier, world, std::atan2(q.y(), q.x()));
+  return on_surface(*earlier, current_.robot + point);
 }
 
 }  // namespace occtrack::planners::safety
