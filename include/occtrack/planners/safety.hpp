@@ -205,6 +205,7 @@ class Certifier {
     std::size_t first = 0, last = 0; // moving_[first, last)
     Eigen::Vector2d center = Eigen::Vector2d::Zero(), velocity = Eigen::Vector2d::Zero();
     double radius = 0.0;             // of the circle about center holding every point
+    double speed = 0.0;              // m/s, |velocity|
     double reach = 0.0;              // m/s at which they may turn or reverse (0: Settings::moving_may_turn off)
     double standoff = 0.0;           // m a stop keeps from their straight paths beyond the clearance
     Eigen::Vector2d ahead = Eigen::Vector2d::Zero();  // unit heading (zero: none, a full disk)

@@ -113,6 +113,7 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     for (std::size_t k = i; k < end; ++k) g.radius = std::max(g.radius, (moving_[k].position - g.center).norm());
     g.velocity = moving_[i].velocity;
     const double speed_of = g.velocity.norm();
+    g.speed = speed_of;
     if (speed_of > 0.0) g.ahead = g.velocity / speed_of;
     g.reach = settings_.moving_may_turn ? std::min(settings_.moving_speed_max, std::max(speed_of, turning)) : 0.0;
     g.standoff = g.reach * settings_.moving_standoff;
@@ -172,8 +173,10 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // moving at w. A group's bounding circle gives a lower bound first, enough when it is clear and (when
   // `distances` are kept) no nearer than what min_distance holds already. True when a point came closer than
   // the clearance, or (`at_rest`) the clearance plus the group's standoff, now or earlier; with `stop_early`,
-  // the groups after that one are not looked at.
-  const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest) {
+  // the groups after that one are not looked at. `at` and `within`: the robot's position, and the time by
+  // which every prediction is taken (a point moves at most its speed times that from where it was seen).
+  const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest, const Eigen::Vector2d& at,
+                               double within) {
     // With `futures`, the worst of five: the velocity kept, zero, reversed, turned 90 degrees either way. Each is
     // the distance to a translated shape, so a group's bounding circle still bounds it from below.
     const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
@@ -188,9 +191,20 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     for (const Group* group : near_groups_) {
       const Group& g = *group;
       const double kept = at_rest ? keep + g.standoff : keep;  // a stop keeps the standoff too
+      // With futures, first a bound below all five from one root (each future moves a point at most the
+      // group's speed times `within`): where it clears the group with 1e-9 m to spare, far more than the
+      // roundings of either bound, the five would have cleared it too, and no distance would have changed.
+      if (futures) {
+        const double low = (at - g.center).norm() - g.speed * within - g.radius;
+        if (low >= kept + 1e-9 && (!distances || low >= verdict.min_distance + 1e-9)) continue;
+      }
       const double bound = distance(g.center, g.velocity) - g.radius;
       if (bound >= kept && (!distances || bound >= verdict.min_distance)) continue;
       for (std::size_t i = g.first; i < g.last; ++i) {
+        if (futures) {  // the same bound, point by point
+          const double low = (at - moving_[i].position).norm() - g.speed * within;
+          if (low >= kept + 1e-9 && (!distances || low >= verdict.min_distance + 1e-9)) continue;
+        }
         const double d = distance(moving_[i].position, g.velocity);
         verdict.min_distance = std::min(verdict.min_distance, d);
         if (d < kept) too_near = true;
@@ -206,13 +220,13 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     const double t0 = c.now, t1 = std::max(c.now, settings_.moving_horizon);
     return near_moving(
         [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - c.p, w, t0, t1); },
-        stop_early, true);
+        stop_early, true, c.p, t1);
   };
   // Moving at p at `now`: clear of each moving point's prediction then (through moving_horizon).
   const auto near_now = [&](const Checkpoint& c, bool stop_early) {
     return c.now <= settings_.moving_horizon + 1e-12 &&
            near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); },
-                       stop_early, false);
+                       stop_early, false, c.p, c.now);
   };
   // Passive safety: clear of wherever a moving point could be had it turned by up to moving_turn_max (a sector
   // of the disk about its heading; 90 degrees: the half disk ahead) or reversed (a segment behind it) at its
