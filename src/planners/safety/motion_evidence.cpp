@@ -103,7 +103,10 @@ const MotionEvidence::Frame* MotionEvidence::older_than(double age) const {
 
 bool MotionEvidence::on_surface(const Frame& frame, const Eigen::Vector2d& world) const {
   const long n = static_cast<long>(frame.returns.size());
-  if (n == 0) return false;
+  // A scan whose beams cannot be told apart by bearing (no increment, or an absurd one or start) shows no
+  // surface here: its beam index would not fit a long.
+  if (n == 0 || !(frame.increment > 1e-9 && frame.increment < 10.0) || !(std::abs(frame.angle_min) < 1e3))
+    return false;
   // The beam nearest the point's bearing from where the frame was taken.
   const Eigen::Vector2d q = world - frame.robot;
   const long centre = detail::nearest_beam(q.y(), q.x(), frame.angle_min, frame.increment);
