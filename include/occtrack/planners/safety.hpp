@@ -101,6 +101,13 @@ class FreeSpace {
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
   /// disk_free's fast answers (d > clearance) on a rough bearing: 1 free, 0 not, -1 unsure.
   int rough_answer(const Eigen::Vector2d& p, double d, double clearance) const;
+  /// The free radius of sector k, taken round the sectors (k may lie outside [0, sectors())).
+  double sector_at(long k) const;
+  /// The sectors a disk at bearing u spans, half_width either side (both in sector units from beam 0):
+  /// `within`, with [*lo, *hi] as window_min takes them; `whole_turn` (a full circle only); `outside`: part
+  /// of them lies outside the field of view.
+  enum class Window { within, whole_turn, outside };
+  Window window(double u, double half_width, long* lo, long* hi) const;
   double window_min(long lo, long hi) const;
   /// Sector k lies between beams k and k + 1; over a full circle, beam n - 1 and beam 0 close one more.
   int sectors() const { return full_circle_ ? beams_ : beams_ - 1; }

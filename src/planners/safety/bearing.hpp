@@ -11,6 +11,9 @@ namespace occtrack::planners::safety::detail {
 /// The most rough_bearing can differ from std::atan2, radians. The polynomial's own error is under 2e-8
 /// (Abramowitz and Stegun 4.4.49); the rest is room for rounding. tests/test_safety.cpp measures it.
 constexpr double kRoughBearingError = 1e-6;
+/// The margin the callers keep from a sector edge, a midpoint between beams or atan2's jump: twice the error,
+/// room for the roundings of their own arithmetic on the bearing.
+constexpr double kRoughBearingSlack = 2.0 * kRoughBearingError;
 
 /// std::atan2(y, x) within kRoughBearingError, for finite (x, y) other than the origin; NaN otherwise (the
 /// callers then take std::atan2). Signs follow atan2's, -0 included, so that only bearings near +-pi, where
@@ -41,7 +44,7 @@ inline bool sure_floor(double rough, double slack, long* floor_of) {
 /// answer: on the rough bearing where it is sure (away from atan2's jump at +-pi and from the midpoints
 /// between beams), else on the exact one.
 inline long nearest_beam(double y, double x, double angle_min, double increment) {
-  const double rough = rough_bearing(y, x), error = 2.0 * kRoughBearingError;
+  const double rough = rough_bearing(y, x), error = kRoughBearingSlack;
   long beam = 0;
   if (std::abs(rough) <= M_PI - error && sure_floor((rough - angle_min) / increment + 0.5, error / increment, &beam))
     return beam;

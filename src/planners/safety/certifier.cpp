@@ -188,23 +188,22 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
       }
       return d;
     };
+    // A lower bound `low` on a distance clears it: no nearer than the clearance kept, nor (when distances are
+    // kept) than min_distance, by `spare`.
+    const auto clears = [&](double low, double kept, double spare) {
+      return low >= kept + spare && (!distances || low >= verdict.min_distance + spare);
+    };
     for (const Group* group : near_groups_) {
       const Group& g = *group;
       const double kept = at_rest ? keep + g.standoff : keep;  // a stop keeps the standoff too
       // With futures, first a bound below all five from one root (each future moves a point at most the
-      // group's speed times `within`): where it clears the group with 1e-9 m to spare, far more than the
-      // roundings of either bound, the five would have cleared it too, and no distance would have changed.
-      if (futures) {
-        const double low = (at - g.center).norm() - g.speed * within - g.radius;
-        if (low >= kept + 1e-9 && (!distances || low >= verdict.min_distance + 1e-9)) continue;
-      }
-      const double bound = distance(g.center, g.velocity) - g.radius;
-      if (bound >= kept && (!distances || bound >= verdict.min_distance)) continue;
+      // group's speed times `within`), for the group and then point by point: where it clears with 1e-9 m to
+      // spare, far more than the roundings of either bound, the five would have cleared too, and no distance
+      // would have changed.
+      if (futures && clears((at - g.center).norm() - g.speed * within - g.radius, kept, 1e-9)) continue;
+      if (clears(distance(g.center, g.velocity) - g.radius, kept, 0.0)) continue;
       for (std::size_t i = g.first; i < g.last; ++i) {
-        if (futures) {  // the same bound, point by point
-          const double low = (at - moving_[i].position).norm() - g.speed * within;
-          if (low >= kept + 1e-9 && (!distances || low >= verdict.min_distance + 1e-9)) continue;
-        }
+        if (futures && clears((at - moving_[i].position).norm() - g.speed * within, kept, 1e-9)) continue;
         const double d = distance(moving_[i].position, g.velocity);
         verdict.min_distance = std::min(verdict.min_distance, d);
         if (d < kept) too_near = true;

@@ -80,7 +80,6 @@ double FreeSpace::window_min(long lo, long hi) const {
 
 bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const double* given_bearing) const {
   if (beams_ == 0 || !p.allFinite() || !(clearance >= 0.0) || !std::isfinite(clearance)) return false;
-  const int sectors = this->sectors();
   const double d = p.norm();
   // Inside the circle every sector reaches (the nearest return's range): free, without the angles.
   if (full_circle_ && d + clearance <= nearest_) return true;
@@ -102,22 +101,17 @@ bool FreeSpace::disk_free(const Eigen::Vector2d& p, double clearance, const doub
   // Fast false: the disk's farthest point, on the centre's own bearing, lies beyond its sector (what exact()
   // would find there first, without the angles). The window below holds that sector, so nothing it could
   // find would make the disk free.
-  long own = static_cast<long>(std::floor(u)) % sectors;
-  if (own < 0) own += sectors;
-  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return false;
+  if (sector_at(static_cast<long>(std::floor(u))) < d + clearance) return false;
   const double half_width = std::asin(clearance / d) / increment_;  // the disk's angular half-span, in sectors
-  long lo = static_cast<long>(std::floor(u - half_width));
-  long hi = static_cast<long>(std::floor(u + half_width));
-  if (full_circle_) {
-    if (hi - lo + 1 >= sectors) {
+  long lo = 0, hi = 0;
+  switch (window(u, half_width, &lo, &hi)) {
+    case Window::whole_turn:
       if (nearest_ >= d + clearance) return true;
       return exact(p, d, clearance, u, INFINITY);
-    }
-    const long shift = lo < 0 ? sectors : (lo >= sectors ? -sectors : 0);
-    lo += shift;
-    hi += shift;
-  } else if (lo < 0 || hi > sectors - 1) {
-    return false;  // part of the disk lies outside the field of view
+    case Window::outside:
+      return false;  // part of the disk lies outside the field of view
+    case Window::within:
+      break;
   }
   // Fast: every sector the disk crosses reaches beyond the disk's farthest point.
   if (window_min(lo, hi) >= d + clearance) return true;
@@ -130,30 +124,40 @@ int FreeSpace::rough_answer(const Eigen::Vector2d& p, double d, double clearance
   // Products with reciprocals stand in for the divisions: their rounding is far inside the slack.
   double bearing = detail::rough_bearing(p.y(), p.x()) - angle_min_;
   bearing -= kTwoPi * std::floor(bearing * (1.0 / kTwoPi));
-  const double error = 2.0 * detail::kRoughBearingError;
+  const double error = detail::kRoughBearingSlack;
   if (!(bearing >= error && bearing <= kTwoPi - error)) return -1;
   const double u = bearing * per_radian_, slack = error * per_radian_;  // the exact u lies within slack of u
-  const int sectors = this->sectors();
   // Fast false, as in disk_free: the own sector ends before the disk's farthest point.
   long own = 0;
   if (!detail::sure_floor(u, slack, &own)) return -1;
-  own %= sectors;
-  if (own < 0) own += sectors;
-  if (sector_[static_cast<std::size_t>(own)] < d + clearance) return 0;
+  if (sector_at(own) < d + clearance) return 0;
   // Fast true, as in disk_free, over a window that holds disk_free's: its half-width from above (tan >= asin),
-  // widened by the slack either side.
+  // widened by the slack either side; less than a turn. Outside the field of view, disk_free's own window may
+  // still lie inside it.
   const double x = clearance / d;  // in [0, 1)
   const double half_width = x / std::sqrt((1.0 - x) * (1.0 + x)) * per_radian_ + 2.0 * slack;
-  if (!(half_width < 0.25 * sectors)) return -1;
-  long lo = static_cast<long>(std::floor(u - half_width)), hi = static_cast<long>(std::floor(u + half_width));
-  if (full_circle_) {
-    const long shift = lo < 0 ? sectors : (lo >= sectors ? -sectors : 0);
-    lo += shift;
-    hi += shift;
-  } else if (lo < 0 || hi > sectors - 1) {
-    return -1;  // disk_free's own window may still lie inside the field of view
-  }
+  long lo = 0, hi = 0;
+  if (!(half_width < 0.25 * sectors()) || window(u, half_width, &lo, &hi) != Window::within) return -1;
   return window_min(lo, hi) >= d + clearance ? 1 : -1;
+}
+
+double FreeSpace::sector_at(long k) const {
+  const long sectors = this->sectors();
+  long own = k % sectors;
+  if (own < 0) own += sectors;
+  return sector_[static_cast<std::size_t>(own)];
+}
+
+FreeSpace::Window FreeSpace::window(double u, double half_width, long* lo, long* hi) const {
+  const long sectors = this->sectors();
+  *lo = static_cast<long>(std::floor(u - half_width));
+  *hi = static_cast<long>(std::floor(u + half_width));
+  if (!full_circle_) return *lo < 0 || *hi > sectors - 1 ? Window::outside : Window::within;
+  if (*hi - *lo + 1 >= sectors) return Window::whole_turn;
+  const long shift = *lo < 0 ? sectors : (*lo >= sectors ? -sectors : 0);
+  *lo += shift;
+  *hi += shift;
+  return Window::within;
 }
 
 bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, double u, double half_width) const {
