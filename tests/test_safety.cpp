@@ -157,9 +157,40 @@ core::Scan random_scan(std::mt19937& rng, int beams, double base) {
   return scan;
 }
 
+/// The free radius of sector k of a full-circle scan (between beams k and k + 1).
+double sector_radius(const core::Scan& scan, int k) {
+  const int beams = static_cast<int>(scan.ranges.size());
+  const auto beam = [&](int i) {
+    const double r = scan.ranges[static_cast<std::size_t>(i % beams)];
+    return std::isnan(r) || r <= 0.0 ? 0.0 : std::min(r, scan.range_max);
+  };
+  return std::min(beam(k), beam(k + 1));
+}
+
+/// How far the disk (centre p, radius c) reaches from the robot within sector k's bearings: its farthest point
+/// along the sector's bearing nearest p's; -infinity where those bearings miss the disk.
+double sector_reach(const core::Scan& scan, int k, const Vec2& p, double c) {
+  const double d = p.norm(), bearing = std::atan2(p.y(), p.x());
+  // The angular distance from the disk's bearing to the sector's bearings [a, a + increment].
+  double a = scan.angle_min + k * scan.angle_increment - bearing;
+  a -= 2.0 * kPi * std::floor((a + kPi) / (2.0 * kPi));  // into [-pi, pi)
+  const double b = a + scan.angle_increment;
+  const double gap = a > 0.0 ? std::min(a, 2.0 * kPi - b) : (b < 0.0 ? -b : 0.0);
+  if (d > c && gap > std::asin(c / d)) return -kInf;  // the sector's bearings miss the disk
+  const double s = d * std::sin(gap);
+  return d * std::cos(gap) + std::sqrt(std::max(0.0, c * c - s * s));
+}
+
+/// The plain test of a full-circle scan: the disk is free when each sector it crosses reaches the disk's
+/// farthest point within the sector's bearings.
+bool plain_disk_free(const core::Scan& scan, const Vec2& p, double c) {
+  for (int k = 0; k < static_cast<int>(scan.ranges.size()); ++k)
+    if (sector_radius(scan, k) < sector_reach(scan, k, p, c)) return false;
+  return true;
+}
+
 // The fast paths of disk_free (the nearest return, the window's minimum, the own sector first) against a plain
-// test of every sector: the disk is free when each sector it crosses reaches the disk's farthest point within
-// the sector's bearings. Random scans (returns, beams without one, unusable ranges) and random disks: knife
+// test of every sector. Random scans (returns, beams without one, unusable ranges) and random disks: knife
 // edges have probability zero. The overload given the bearing must agree too.
 TEST(FreeSpace, FastPathsAgreeWithAPlainSectorBySectorTest) {
   std::mt19937 rng(20261204);
@@ -171,30 +202,11 @@ TEST(FreeSpace, FastPathsAgreeWithAPlainSectorBySectorTest) {
     core::Scan scan = random_scan(rng, beams, base);
     FreeSpace free;
     free.build(scan);
-    const double increment = scan.angle_increment;
-    const auto radius_of = [&](int k) {  // sector k: between beams k and k + 1
-      const auto beam = [&](int i) {
-        const double r = scan.ranges[static_cast<std::size_t>(i % beams)];
-        return std::isnan(r) || r <= 0.0 ? 0.0 : std::min(r, scan.range_max);
-      };
-      return std::min(beam(k), beam(k + 1));
-    };
     for (int q = 0; q < 3000; ++q, ++queries) {
       const Vec2 p = base * Vec2(2.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
       const double c = 0.02 + 0.4 * unit(rng);
-      const double d = p.norm(), bearing = std::atan2(p.y(), p.x());
-      bool plain = true;
-      for (int k = 0; k < beams && plain; ++k) {
-        // The angular distance from the disk's bearing to the sector's bearings [a, a + increment].
-        double a = scan.angle_min + k * increment - bearing;
-        a -= 2.0 * kPi * std::floor((a + kPi) / (2.0 * kPi));  // into [-pi, pi)
-        const double b = a + increment;
-        const double gap = a > 0.0 ? std::min(a, 2.0 * kPi - b) : (b < 0.0 ? -b : 0.0);
-        if (d > c && gap > std::asin(c / d)) continue;  // the sector's bearings miss the disk
-        const double s = d * std::sin(gap);
-        const double farthest = d * std::cos(gap) + std::sqrt(std::max(0.0, c * c - s * s));
-        if (radius_of(k) < farthest) plain = false;
-      }
+      const double bearing = std::atan2(p.y(), p.x());
+      const bool plain = plain_disk_free(scan, p, c);
       const bool fast = free.disk_free(p, c);
       mismatches += fast != plain;
       free_count += fast;
@@ -205,6 +217,43 @@ TEST(FreeSpace, FastPathsAgreeWithAPlainSectorBySectorTest) {
   // Both answers occur often enough for the comparison to mean something.
   EXPECT_GT(free_count, queries / 10);
   EXPECT_LT(free_count, queries * 9 / 10);
+}
+
+// A disk that holds the robot (the early checkpoints of every manoeuvre) crosses every sector: disk_free passes
+// over blocks of sectors and decides most sectors without an angle (FreeSpace::crosses_robot). Knife edges: a
+// run of 1 to 40 beams, somewhere around the disk, set to the farthest the disk reaches within their sectors,
+// nudged in or out by 1e-13 to 1e-2 m; the rest of the scan lies beyond the disk. The verdict must be the plain
+// test's, which is free exactly when the nudge is outward.
+TEST(FreeSpace, ADiskHoldingTheRobotIsJudgedAsSectorBySectorAtKnifeEdges) {
+  std::mt19937 rng(20261205);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double nudges[] = {1e-13, -1e-13, 1e-11, -1e-11, 1e-9, -1e-9, 1e-7, -1e-7, 1e-4, -1e-4, 1e-2, -1e-2};
+  int mismatches = 0, free_count = 0, queries = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int beams = trial % 4 == 0 ? 90 : 360;
+    core::Scan scan = make_scan([&](double) { return 2.0 + 3.0 * unit(rng); }, beams, 8.0);
+    scan.angle_min = 2.0 * kPi * unit(rng) - kPi;
+    const double c = 0.1 + 0.5 * unit(rng), d = c * unit(rng), heading = 2.0 * kPi * unit(rng);
+    const Vec2 p = d * Vec2(std::cos(heading), std::sin(heading));
+    const int first = static_cast<int>(beams * unit(rng)), run = 1 + static_cast<int>(40 * unit(rng));
+    // The farthest the disk reaches over the sectors the run's beams bound (one either side of each beam).
+    double reach = 0.0;
+    for (int k = first - 1; k < first + run; ++k) reach = std::max(reach, sector_reach(scan, (k + beams) % beams, p, c));
+    for (const double nudge : nudges) {
+      for (int i = first; i < first + run; ++i) scan.ranges[static_cast<std::size_t>(i % beams)] = reach + nudge;
+      FreeSpace free;
+      free.build(scan);
+      const bool plain = plain_disk_free(scan, p, c);
+      EXPECT_EQ(plain, nudge > 0.0) << "trial " << trial << ", nudge " << nudge;
+      const bool fast = free.disk_free(p, c);
+      mismatches += fast != plain;
+      free_count += fast;
+      ++queries;
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << queries;
+  EXPECT_GT(free_count, queries / 3);
+  EXPECT_LT(free_count, queries * 2 / 3);
 }
 
 // The free-space test and the motion evidence look bearings up on a rough atan2 (planners/safety/bearing.hpp)

@@ -99,6 +99,10 @@ class FreeSpace {
  private:
   bool disk_free(const Eigen::Vector2d& p, double clearance, const double* bearing) const;  // computed if null
   bool exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const;
+  /// exact()'s test of one sector against a disk that holds the robot, without an angle: true when sure, with
+  /// *free its verdict; false to leave it to the angle.
+  bool crosses_robot(const Eigen::Vector2d& p, double d, double clearance, double radius, long first, long last,
+                     bool* free) const;
   /// disk_free's fast answers (d > clearance) on a rough bearing: 1 free, 0 not, -1 unsure.
   int rough_answer(const Eigen::Vector2d& p, double d, double clearance) const;
   /// The free radius of sector k, taken round the sectors (k may lie outside [0, sectors())).
@@ -119,6 +123,11 @@ class FreeSpace {
   double nearest_ = 0.0, nearest_bearing_ = 0.0;
   std::vector<double> sector_;  // free radius of sector k (between beams k and k+1)
   std::vector<double> table_;   // sparse table of minima over sector_, level by level
+  static constexpr long kBlock = 16;
+  std::vector<double> block_;   // block_[b]: the minimum over sector_[b kBlock, (b + 1) kBlock)
+  bool narrow_blocks_ = false;  // a block spans less than a right angle
+  std::vector<Eigen::Vector2d> beam_direction_;  // unit vector of beam k
+  double directions_from_ = NAN, directions_step_ = NAN;  // the angle_min and increment they were made for
   int levels_ = 0;
 };
 

@@ -65,6 +65,23 @@ void FreeSpace::build(const core::Scan& scan) {
     const int half = 1 << (j - 1);
     for (int i = 0; i < sectors; ++i) level[i] = i + half < sectors ? std::min(below[i], below[i + half]) : below[i];
   }
+  // The beams' unit vectors, worked out again only when the scan's angles change.
+  if (beam_direction_.size() != static_cast<std::size_t>(n) || directions_from_ != angle_min_ ||
+      directions_step_ != increment_) {
+    beam_direction_.resize(static_cast<std::size_t>(n));
+    for (int k = 0; k < n; ++k) {
+      const double angle = angle_min_ + k * increment_;
+      beam_direction_[static_cast<std::size_t>(k)] = Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    }
+    directions_from_ = angle_min_;
+    directions_step_ = increment_;
+  }
+  // The minimum over each whole block of kBlock sectors (exact() passes over blocks beyond a disk).
+  block_.resize(static_cast<std::size_t>(sectors / kBlock));
+  narrow_blocks_ = kBlock * increment_ < 0.5 * M_PI;
+  for (std::size_t b = 0; b < block_.size(); ++b)
+    block_[b] = *std::min_element(sector_.begin() + static_cast<long>(b * kBlock),
+                                  sector_.begin() + static_cast<long>((b + 1) * kBlock));
   beams_ = n;
 }
 
@@ -160,7 +177,31 @@ FreeSpace::Window FreeSpace::window(double u, double half_width, long* lo, long*
   return Window::within;
 }
 
-bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, double u, double half_width) const {
+bool FreeSpace::crosses_robot(const Eigen::Vector2d& p, double d, double clearance, double radius, long first,
+                              long last, bool* free) const {
+  // A disk that holds the robot (d <= clearance) is left once along every bearing, at far_intersection, which
+  // shrinks as the bearing turns away from the centre's; a sector keeps the disk when its radius reaches that far
+  // at its bearing nearest the centre's. Equivalently, the point at that radius on that bearing lies on or
+  // outside the disk: with m = d cos(delta), the largest p . e over the bearings e between beams `first` and
+  // `last` (d when the centre's lies between them, else the nearer edge beam's),
+  //   q = radius^2 - 2 radius m + d^2 - clearance^2 = (radius - far)(radius - near), near <= 0 < radius,
+  // without an angle. Where |q| clears 1e-9 (radius + d + clearance)^2, |radius - far| exceeds 1e-9 (radius + d
+  // + clearance), a million times the rounding of either form (far's slope in delta is at most 2 d), and the
+  // sign of q is exact()'s verdict; else exact() decides on the angle. Over several sectors (less than a
+  // right angle), a radius no larger than any of theirs that keeps the disk at the nearest bearing keeps it at
+  // each sector's own (its far_intersection no farther), by the same margin.
+  const Eigen::Vector2d& a = beam_direction_[static_cast<std::size_t>(first % beams_)];
+  const Eigen::Vector2d& b = beam_direction_[static_cast<std::size_t>(last % beams_)];
+  const bool inside = a.x() * p.y() - a.y() * p.x() >= 0.0 && p.x() * b.y() - p.y() * b.x() >= 0.0;
+  const double m = inside ? d : std::max(p.dot(a), p.dot(b));
+  const double q = radius * radius - 2.0 * radius * m + d * d - clearance * clearance;
+  const double scale = radius + d + clearance, slack = 1e-9 * scale * scale;
+  if (std::abs(q) <= slack) return false;
+  *free = q > 0.0;
+  return true;
+}
+
+bool FreeSpace::exact(const Eigen::Vector2d& p, double d, double clearance, double u, double half_width) const {
   const int sectors = this->sectors();
   const double period = full_circle_ ? static_cast<double>(beams_) : INFINITY;
   long lo = 0, hi = sectors - 1;
@@ -168,17 +209,34 @@ bool FreeSpace::exact(const Eigen::Vector2d& /*p*/, double d, double clearance, 
     lo = static_cast<long>(std::floor(u - half_width));
     hi = static_cast<long>(std::floor(u + half_width));
   }
+  const double reach = d + clearance;  // the disk's farthest point from the robot
+  const bool holds = d <= clearance;   // the disk holds the robot: every bearing leaves it once
+  bool decided = false;
   for (long k = lo; k <= hi; ++k) {
+    long index = k % sectors;
+    if (index < 0) index += sectors;
+    // A block of sectors all beyond the disk's farthest point: none of them can fail (most of a whole turn
+    // around a disk that holds the robot).
+    if (index % kBlock == 0 && k + (kBlock - 1) <= hi && index + kBlock <= sectors) {
+      const double least = block_[static_cast<std::size_t>(index / kBlock)];
+      if (least >= reach || (holds && narrow_blocks_ &&
+                             crosses_robot(p, d, clearance, least, index, index + kBlock, &decided) && decided)) {
+        k += kBlock - 1;
+        continue;
+      }
+    }
+    const double radius = sector_[static_cast<std::size_t>(index)];
+    if (radius >= reach) continue;  // beyond the disk's farthest point: no need for the angle
+    if (holds && crosses_robot(p, d, clearance, radius, index, index + 1, &decided)) {
+      if (!decided) return false;
+      continue;
+    }
     // Angular distance (in sectors) from the centre's bearing to sector k, [k, k + 1].
     double w = u - static_cast<double>(k);
     if (std::isfinite(period)) w -= period * std::floor(w / period);  // into [0, period)
     double gap = 0.0;
     if (w > 1.0) gap = std::isfinite(period) ? std::min(w - 1.0, period - w) : w - 1.0;
     if (w < 0.0) gap = -w;
-    long index = k % sectors;
-    if (index < 0) index += sectors;
-    const double radius = sector_[static_cast<std::size_t>(index)];
-    if (radius >= d + clearance) continue;  // beyond the disk's farthest point: no need for the angle
     const double delta = gap * increment_;
     if (d > clearance && delta * d > clearance && delta > std::asin(clearance / d)) continue;  // not reached
     if (radius < far_intersection(d, clearance, std::min(delta, M_PI))) return false;
