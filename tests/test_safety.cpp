@@ -486,10 +486,11 @@ TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
   // Without min_distance, certify_held checks the manoeuvre's checkpoints from its stop backwards and skips
   // objects whose bounding circle stays clear; with it, it follows the manoeuvre forwards and measures every
   // object. The best effort's give_up_at drops a manoeuvre once it comes that near. None of these may change
-  // a verdict: random scenes of walls and moving objects, random commands.
+  // a verdict, nor a distance where the manoeuvre is kept: random scenes of walls and moving objects, random
+  // commands.
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int certified = 0, refused = 0, given_up = 0;
+  int certified = 0, refused = 0, given_up[2] = {0, 0}, kept_in_free_space[2] = {0, 0};
   for (int scene = 0; scene < 40; ++scene) {
     // Ranges piecewise constant over blocks of 12 beams, 0.8 to 4 m, some without a return.
     std::vector<double> block(30);
@@ -514,23 +515,33 @@ TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
       const bool backwards = c.certify_held(command, hold), forwards = c.certify_held(command, hold, &distance);
       ASSERT_EQ(backwards, forwards) << "scene " << scene << ", command " << command.transpose() << ", hold " << hold;
       ++(backwards ? certified : refused);
-      const Certifier::Verdict whole = c.check(command, hold, true);
-      const double give_up_at = std::isfinite(whole.min_distance) ? whole.min_distance - 0.05 + 0.1 * unit(rng) : 1.0;
-      const Certifier::Verdict cut = c.check(command, hold, true, c.clearance(), give_up_at);
-      if (whole.min_distance <= give_up_at) {
-        EXPECT_FALSE(cut.in_free_space);
-        ++given_up;
-      } else {
-        EXPECT_EQ(cut.in_free_space, whole.in_free_space);
-        EXPECT_EQ(cut.certified, whole.certified);
-        EXPECT_EQ(cut.min_distance, whole.min_distance);
+      // Against the constant-velocity prediction and against the five futures (the best effort's), which
+      // drops a manoeuvre as it is simulated, looking first where and at what the one before was dropped.
+      for (const bool futures : {false, true}) {
+        const Certifier::Verdict whole = c.check(command, hold, true, c.clearance(), -kInf, futures);
+        const double give_up_at =
+            std::isfinite(whole.min_distance) ? whole.min_distance - 0.05 + 0.1 * unit(rng) : 1.0;
+        const Certifier::Verdict cut = c.check(command, hold, true, c.clearance(), give_up_at, futures);
+        if (whole.min_distance <= give_up_at) {
+          EXPECT_FALSE(cut.in_free_space);
+          EXPECT_LE(cut.min_distance, give_up_at);
+          ++given_up[futures];
+        } else {
+          EXPECT_EQ(cut.in_free_space, whole.in_free_space);
+          EXPECT_EQ(cut.certified, whole.certified);
+          EXPECT_EQ(cut.min_distance, whole.min_distance);
+          kept_in_free_space[futures] += whole.in_free_space;
+        }
       }
     }
   }
   // Not a vacuous comparison: both verdicts, and both sides of give_up_at, occur.
   EXPECT_GT(certified, 50);
   EXPECT_GT(refused, 50);
-  EXPECT_GT(given_up, 50);
+  for (const bool futures : {false, true}) {
+    EXPECT_GT(given_up[futures], 50);
+    EXPECT_GT(kept_in_free_space[futures], 50);
+  }
 }
 
 TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -183,7 +184,9 @@ class Certifier {
   /// the margin, weighs the manoeuvres at the robot's bare radius.
   ///
   /// `give_up_at`: once min_distance falls to this or below, the manoeuvre is dropped (neither certified nor in
-  /// free space): the best effort's search, where a manoeuvre that comes that near cannot beat the best so far.
+  /// free space; min_distance is then one distance at or below give_up_at, not necessarily the smallest): the
+  /// best effort's search, where a manoeuvre that comes that near cannot beat the best so far. A manoeuvre not
+  /// dropped gets the same verdict and min_distance as without give_up_at.
   ///
   /// `futures`: min_distance (and the verdict) take, for each moving point, the worst of five futures from scan
   /// time: it keeps its velocity, stops, reverses, or turns 90 degrees either way at its speed. The best effort
@@ -215,6 +218,8 @@ class Certifier {
   };
   mutable std::vector<Checkpoint> checkpoints_;  // follow()'s scratch (so one Certifier serves one thread)
   mutable double failed_at_ = INFINITY;  // when the last manoeuvre refused this cycle failed (follow()'s hint)
+  mutable double dropped_at_ = 0.0;      // the best effort's search: when the last manoeuvre dropped came too near,
+  mutable std::size_t dropped_by_ = SIZE_MAX;  // and to which group (follow()'s hints)
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();
   std::vector<MovingPoint> moving_;  // sorted by velocity, then bearing: the points of one object together
   struct Group {                     // a run of neighbouring moving points sharing one velocity (of one object)

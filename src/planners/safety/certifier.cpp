@@ -74,6 +74,8 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   moving_.clear();
   groups_.clear();
   failed_at_ = INFINITY;
+  dropped_at_ = 0.0;
+  dropped_by_ = SIZE_MAX;
   const double turning = settings_.moving_may_turn && std::isfinite(moving_speed) ? std::max(0.0, moving_speed) : 0.0;
   double nearest_moving = INFINITY;
   for (const MovingPoint& m : moving) {
@@ -175,19 +177,22 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // the clearance, or (`at_rest`) the clearance plus the group's standoff, now or earlier; with `stop_early`,
   // the groups after that one are not looked at. `at` and `within`: the robot's position, and the time by
   // which every prediction is taken (a point moves at most its speed times that from where it was seen).
+  //
+  // With `futures`, a point's distance is the worst of five: the velocity kept, zero, reversed, turned 90
+  // degrees either way. Each is the distance to a translated shape, so a group's bounding circle still bounds it
+  // from below.
+  const auto worst = [&](auto&& predicted, const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
+    double d = predicted(q, w);
+    if (futures && !w.isZero()) {
+      const Eigen::Vector2d turned(-w.y(), w.x());
+      d = std::min({d, predicted(q, Eigen::Vector2d::Zero()), predicted(q, -w), predicted(q, turned),
+                    predicted(q, -turned)});
+    }
+    return d;
+  };
   const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest, const Eigen::Vector2d& at,
                                double within) {
-    // With `futures`, the worst of five: the velocity kept, zero, reversed, turned 90 degrees either way. Each is
-    // the distance to a translated shape, so a group's bounding circle still bounds it from below.
-    const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
-      double d = predicted(q, w);
-      if (futures && !w.isZero()) {
-        const Eigen::Vector2d turned(-w.y(), w.x());
-        d = std::min({d, predicted(q, Eigen::Vector2d::Zero()), predicted(q, -w), predicted(q, turned),
-                      predicted(q, -turned)});
-      }
-      return d;
-    };
+    const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return worst(predicted, q, w); };
     // A lower bound `low` on a distance clears it: no nearer than the clearance kept, nor (when distances are
     // kept) than min_distance, by `spare`.
     const auto clears = [&](double low, double kept, double spare) {
@@ -215,18 +220,61 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // Stopped at p from `now`: at rest until moving_horizon, clear of every moving point's straight path through
   // then (a stop in an oncoming obstacle's lane is not certified while the obstacle is less than moving_horizon
   // away), by the clearance and the group's standoff (a still robot must be able to dodge a late-seen turn).
+  const auto rest_until = [&](const Checkpoint& c) { return std::max(c.now, settings_.moving_horizon); };
+  const auto at_rest = [&](const Checkpoint& c) {
+    return [&c, t1 = rest_until(c)](const Eigen::Vector2d& q, const Eigen::Vector2d& w) {
+      return closest_approach(q - c.p, w, c.now, t1);
+    };
+  };
   const auto near_at_rest = [&](const Checkpoint& c, bool stop_early) {
-    const double t0 = c.now, t1 = std::max(c.now, settings_.moving_horizon);
-    return near_moving(
-        [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return closest_approach(q - c.p, w, t0, t1); },
-        stop_early, true, c.p, t1);
+    return near_moving(at_rest(c), stop_early, true, c.p, rest_until(c));
   };
   // Moving at p at `now`: clear of each moving point's prediction then (through moving_horizon).
-  const auto near_now = [&](const Checkpoint& c, bool stop_early) {
-    return c.now <= settings_.moving_horizon + 1e-12 &&
-           near_moving([&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); },
-                       stop_early, false, c.p, c.now);
+  const auto watched = [&](const Checkpoint& c) { return c.now <= settings_.moving_horizon + 1e-12; };
+  const auto in_motion = [&](const Checkpoint& c) {
+    return [&c](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return (c.p - (q + w * c.now)).norm(); };
   };
+  const auto near_now = [&](const Checkpoint& c, bool stop_early) {
+    return watched(c) && near_moving(in_motion(c), stop_early, false, c.p, c.now);
+  };
+  // The best effort's search (a finite give_up_at, distances to the end): whether some distance at checkpoint c
+  // is at or below give_up_at, the test on which follow's walk below drops a manoeuvre, without working out
+  // the others. A bound that clears give_up_at by 1e-9 m, far more than its rounding, spares the points under it
+  // (a distance is then above give_up_at); any distance worked out is the walk's own, to the last bit.
+  const bool searching = to_the_end && distances && give_up_at > -INFINITY;
+  double reached = INFINITY;  // the distance at or below give_up_at that dropped the manoeuvre
+  // The group that dropped the last manoeuvre is looked at first.
+  const auto comes_within = [&](auto&& predicted, const Eigen::Vector2d& at, double within) {
+    const double beyond = give_up_at + 1e-9;
+    const auto group_within = [&](const Group& g) {
+      if (futures && (at - g.center).norm() - g.speed * within - g.radius > beyond) return false;
+      if (worst(predicted, g.center, g.velocity) - g.radius > beyond) return false;
+      for (std::size_t i = g.first; i < g.last; ++i) {
+        if (futures && (at - moving_[i].position).norm() - g.speed * within > beyond) continue;
+        const double d = worst(predicted, moving_[i].position, g.velocity);
+        if (d <= give_up_at) {
+          reached = d;
+          dropped_by_ = static_cast<std::size_t>(&g - groups_.data());
+          return true;
+        }
+      }
+      return false;
+    };
+    const bool hint = dropped_by_ < groups_.size();
+    if (hint && group_within(groups_[dropped_by_])) return true;
+    for (const Group& g : groups_)
+      if (!(hint && &g == &groups_[dropped_by_]) && group_within(g)) return true;
+    return false;
+  };
+  const auto dropped_at = [&](const Checkpoint& c) {
+    return c.stopped ? comes_within(at_rest(c), c.p, rest_until(c))
+                     : watched(c) && comes_within(in_motion(c), c.p, c.now);
+  };
+  const auto drop = [&](const Checkpoint& c) {
+    dropped_at_ = c.now;
+    return Verdict{false, false, reached};
+  };
+  std::size_t distances_tested = 0;  // the search's checkpoints before this one have had their distances tested
   // Passive safety: clear of wherever a moving point could be had it turned by up to moving_turn_max (a sector
   // of the disk about its heading; 90 degrees: the half disk ahead) or reversed (a segment behind it) at its
   // reach speed.
@@ -286,6 +334,21 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
       if (verdict_only && hinted < 0 && now >= failed_at_ - 1e-12) {
         hinted = static_cast<long>(checkpoints_.size()) - 1;
         if (!holds(checkpoints_.back())) return verdict;
+      }
+      // The search drops most manoeuvres within their first few checkpoints: found as the simulation gets
+      // there, the rest of it is spared. The checkpoints before the one where the last manoeuvre was dropped
+      // are tested for free space only until this one gets there, where the distances are tested first (most
+      // manoeuvres are dropped where the one before was); then theirs. Where the manoeuvre leaves known-free
+      // space first, the walk below takes it from the start (its min_distance up to there is the verdict's).
+      if (searching) {
+        const std::size_t last = checkpoints_.size() - 1;
+        if (!free_.disk_free(checkpoints_[last].p, keep)) break;
+        if (now >= dropped_at_ - 1e-12 || stopped) {
+          if (dropped_at(checkpoints_[last])) return drop(checkpoints_[last]);
+          for (; distances_tested < last; ++distances_tested)
+            if (dropped_at(checkpoints_[distances_tested])) return drop(checkpoints_[distances_tested]);
+          distances_tested = last + 1;
+        }
       }
       if (stopped) break;
     }
