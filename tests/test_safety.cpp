@@ -490,7 +490,7 @@ TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
   // commands.
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int certified = 0, refused = 0, given_up[2] = {0, 0}, kept_in_free_space[2] = {0, 0};
+  int certified = 0, refused = 0, refused_while_held = 0, given_up[2] = {0, 0}, kept_in_free_space[2] = {0, 0};
   for (int scene = 0; scene < 40; ++scene) {
     // Ranges piecewise constant over blocks of 12 beams, 0.8 to 4 m, some without a return.
     std::vector<double> block(30);
@@ -515,6 +515,16 @@ TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
       const bool backwards = c.certify_held(command, hold), forwards = c.certify_held(command, hold, &distance);
       ASSERT_EQ(backwards, forwards) << "scene " << scene << ", command " << command.transpose() << ", hold " << hold;
       ++(backwards ? certified : refused);
+      // Refused while still held: refused held longer too (the safety layer skips those evasive manoeuvres).
+      // Both ways: a refusal that a longer hold escapes was not while held.
+      if (!c.certify_held(command, hold)) {
+        const bool while_held = c.refused_while_held(hold);
+        refused_while_held += while_held;
+        for (const double longer : {0.3, 1.0}) {
+          const bool escaped = c.certify_held(command, hold + longer);
+          EXPECT_FALSE(escaped && while_held) << "scene " << scene << ", command " << command.transpose();
+        }
+      }
       // Against the constant-velocity prediction and against the five futures (the best effort's), which
       // drops a manoeuvre as it is simulated, looking first where and at what the one before was dropped.
       for (const bool futures : {false, true}) {
@@ -538,6 +548,7 @@ TEST(Certifier, TheVerdictDoesNotDependOnWhatTheCallerAsksFor) {
   // Not a vacuous comparison: both verdicts, and both sides of give_up_at, occur.
   EXPECT_GT(certified, 50);
   EXPECT_GT(refused, 50);
+  EXPECT_GT(refused_while_held, 50);
   for (const bool futures : {false, true}) {
     EXPECT_GT(given_up[futures], 50);
     EXPECT_GT(kept_in_free_space[futures], 50);
@@ -570,6 +581,37 @@ TEST(Certifier, AStopInAnOncomingObstaclesLaneIsWatchedThroughTheHorizon) {
   Certifier moving(certifier_settings());
   moving.begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), {{Vec2(0.2, 2.0), Vec2(0.0, -4.0)}});
   EXPECT_FALSE(moving.certify(Vec2::Zero()));
+}
+
+TEST(Certifier, OnlyARefusalWhileTheCommandIsHeldCarriesOverToLongerHolds) {
+  // An object of five points comes straight at the robot at 1 to 1.5 m/s from 2 to 3 m. Sidestepping briefly
+  // stops in its lane: refused after the hold, at the stop, and held a second longer the robot clears the
+  // lane, certified. The safety layer skips the longer holds of an evasive manoeuvre only when it was refused
+  // while held (below).
+  const core::Scan open = make_scan([](double) { return kInf; });
+  struct Case {
+    double distance, speed, command, hold;
+  };
+  for (const Case& k : {Case{2.0, 1.0, 2.0, 0.05}, Case{2.0, 1.0, 2.0, 0.5}, Case{3.0, 1.5, 1.0, 0.05},
+                        Case{3.0, 1.5, 2.0, 0.5}}) {
+    std::vector<MovingPoint> moving;
+    for (int i = 0; i < 5; ++i) moving.push_back({Vec2(k.distance, -0.2 + 0.1 * i), Vec2(-k.speed, 0.0)});
+    Certifier c(certifier_settings(0.25, 0.05));
+    c.begin(open, Vec2::Zero(), Vec2::Zero(), moving, k.speed);
+    const Vec2 aside(0.0, k.command);
+    EXPECT_FALSE(c.certify_held(aside, k.hold));
+    EXPECT_FALSE(c.refused_while_held(k.hold)) << "distance " << k.distance << ", hold " << k.hold;
+    EXPECT_TRUE(c.certify_held(aside, k.hold + 1.0));
+  }
+  // The robot at 1 m/s beside an object 1 m ahead going its way: reversing at 2 m/s is refused while held,
+  // and so held longer.
+  std::vector<MovingPoint> alongside;
+  for (int i = 0; i < 5; ++i) alongside.push_back({Vec2(1.0, 0.3 + 0.1 * i), Vec2(1.0, 0.0)});
+  Certifier c(certifier_settings(0.25, 0.05));
+  c.begin(open, Vec2(1.0, 0.0), Vec2(1.0, 0.0), alongside, 1.0);
+  EXPECT_FALSE(c.certify_held(Vec2(-2.0, 0.0), 0.5));
+  EXPECT_TRUE(c.refused_while_held(0.5));
+  for (const double hold : {0.6, 1.0, 1.5, 3.0}) EXPECT_FALSE(c.certify_held(Vec2(-2.0, 0.0), hold)) << hold;
 }
 
 TEST(Certifier, AStopBesideALaneKeepsTheStandoff) {

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -168,6 +169,12 @@ class Certifier {
     if (min_distance) *min_distance = v.min_distance;
     return v.certified;
   }
+  /// Whether the manoeuvre certify_held() refused last (with `hold_time`, without min_distance) failed a check
+  /// while its command was still held: the same command held longer takes the same way until then, with the
+  /// same checkpoints, and is refused too.
+  bool refused_while_held(double hold_time) const {
+    return refused_at_ < settings_.latency + std::max(hold(), hold_time) - 1e-12;
+  }
   /// The whole story of a manoeuvre: certified; or not, but at least inside known-free space throughout (only
   /// moving points come too near); and the smallest distance between the robot's centre and a moving point.
   /// With `to_the_end`, a moving point too near does not stop the simulation, so that min_distance covers the
@@ -218,6 +225,7 @@ class Certifier {
   };
   mutable std::vector<Checkpoint> checkpoints_;  // follow()'s scratch (so one Certifier serves one thread)
   mutable double failed_at_ = INFINITY;  // when the last manoeuvre refused this cycle failed (follow()'s hint)
+  mutable double refused_at_ = INFINITY;  // the failed check of the last verdict alone (infinity: none found)
   mutable double dropped_at_ = 0.0;      // the best effort's search: when the last manoeuvre dropped came too near,
   mutable std::size_t dropped_by_ = SIZE_MAX;  // and to which group (follow()'s hints)
   Eigen::Vector2d velocity_ = Eigen::Vector2d::Zero(), previous_ = Eigen::Vector2d::Zero();

@@ -158,6 +158,7 @@ double passive_distance(const Eigen::Vector2d& q, const Eigen::Vector2d& ahead, 
 Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold_time, bool to_the_end,
                                      double clearance, bool distances, double give_up_at, bool futures) const {
   Verdict verdict;
+  refused_at_ = INFINITY;
   const double keep = std::min(clearance, clearance_);  // the clearance kept: never more than this cycle's
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
   if (!command.allFinite() || !std::isfinite(hold_time) || !(keep > 0.0)) return verdict;
@@ -333,7 +334,10 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
       // this one gets there. Candidates are often alike, and fail alike: the rest of the way is then spared.
       if (verdict_only && hinted < 0 && now >= failed_at_ - 1e-12) {
         hinted = static_cast<long>(checkpoints_.size()) - 1;
-        if (!holds(checkpoints_.back())) return verdict;
+        if (!holds(checkpoints_.back())) {
+          refused_at_ = now;
+          return verdict;
+        }
       }
       // The search drops most manoeuvres within their first few checkpoints: found as the simulation gets
       // there, the rest of it is spared. The checkpoints before the one where the last manoeuvre was dropped
@@ -382,7 +386,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     if (checkpoints_.empty() || !checkpoints_.back().stopped) return verdict;  // still moving at the horizon
     for (long i = static_cast<long>(checkpoints_.size()) - 1; i >= 0; --i)
       if (i != hinted && !holds(checkpoints_[static_cast<std::size_t>(i)])) {
-        failed_at_ = checkpoints_[static_cast<std::size_t>(i)].now;
+        failed_at_ = refused_at_ = checkpoints_[static_cast<std::size_t>(i)].now;
         return verdict;
       }
     verdict.in_free_space = verdict.certified = true;

@@ -186,9 +186,15 @@ class Shielded final : public Planner {
     std::sort(candidates_.begin(), candidates_.end(), [](const Candidate& a, const Candidate& b) {
       return a.gap < b.gap || (a.gap == b.gap && a.hold < b.hold);
     });
+    // A command refused while still held is refused held longer too (its siblings follow it, by hold).
+    const Eigen::Vector2d* refused = nullptr;
     for (const Candidate& c : candidates_) {
       if (stop_certified && c.gap >= wish.norm() - 1e-9) return send(out, Eigen::Vector2d::Zero(), SafetyAction::stop);
-      if (!certifier_.certify_held(c.command, c.hold)) continue;
+      if (refused != nullptr && c.command == *refused) continue;
+      if (!certifier_.certify_held(c.command, c.hold)) {
+        refused = certifier_.refused_while_held(c.hold) ? &c.command : nullptr;
+        continue;
+      }
       evasive_ = c.command;
       send(out, c.command, SafetyAction::evasive);
       evasive_left_ = std::max(c.hold, interval);
