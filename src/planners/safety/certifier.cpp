@@ -191,29 +191,37 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     }
     return d;
   };
+  // One group's points that its bounds leave, the bounds first: `clears(low, spare)` says whether a lower
+  // bound `low` on the distances rules them out (with `spare` m to spare where the bound has roundings of its own
+  // to cover); `visit(d)` takes each distance worked out, in the points' order, and returns true to stop there.
+  // With futures, first a bound below all five from one root (each future moves a point at most the group's
+  // speed times `within`), for the group and then point by point: where it clears with 1e-9 m to spare, far
+  // more than the roundings of either bound, the five would have cleared too. True when `visit` stopped.
+  const auto group_pass = [&](const Group& g, auto&& predicted, const Eigen::Vector2d& at, double within,
+                              auto&& clears, auto&& visit) {
+    if (futures && clears((at - g.center).norm() - g.speed * within - g.radius, 1e-9)) return false;
+    if (clears(worst(predicted, g.center, g.velocity) - g.radius, 0.0)) return false;
+    for (std::size_t i = g.first; i < g.last; ++i) {
+      if (futures && clears((at - moving_[i].position).norm() - g.speed * within, 1e-9)) continue;
+      if (visit(worst(predicted, moving_[i].position, g.velocity))) return true;
+    }
+    return false;
+  };
   const auto near_moving = [&](auto&& predicted, bool stop_early, bool at_rest, const Eigen::Vector2d& at,
                                double within) {
-    const auto distance = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& w) { return worst(predicted, q, w); };
-    // A lower bound `low` on a distance clears it: no nearer than the clearance kept, nor (when distances are
-    // kept) than min_distance, by `spare`.
-    const auto clears = [&](double low, double kept, double spare) {
-      return low >= kept + spare && (!distances || low >= verdict.min_distance + spare);
-    };
     for (const Group* group : near_groups_) {
       const Group& g = *group;
       const double kept = at_rest ? keep + g.standoff : keep;  // a stop keeps the standoff too
-      // With futures, first a bound below all five from one root (each future moves a point at most the
-      // group's speed times `within`), for the group and then point by point: where it clears with 1e-9 m to
-      // spare, far more than the roundings of either bound, the five would have cleared too, and no distance
-      // would have changed.
-      if (futures && clears((at - g.center).norm() - g.speed * within - g.radius, kept, 1e-9)) continue;
-      if (clears(distance(g.center, g.velocity) - g.radius, kept, 0.0)) continue;
-      for (std::size_t i = g.first; i < g.last; ++i) {
-        if (futures && clears((at - moving_[i].position).norm() - g.speed * within, kept, 1e-9)) continue;
-        const double d = distance(moving_[i].position, g.velocity);
+      // A bound clears: no nearer than the clearance kept, nor (when distances are kept) than min_distance; no
+      // distance would have changed.
+      const auto clears = [&](double low, double spare) {
+        return low >= kept + spare && (!distances || low >= verdict.min_distance + spare);
+      };
+      group_pass(g, predicted, at, within, clears, [&](double d) {
         verdict.min_distance = std::min(verdict.min_distance, d);
         if (d < kept) too_near = true;
-      }
+        return false;
+      });
       if (too_near && stop_early) return true;
     }
     return too_near;
@@ -246,20 +254,15 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   double reached = INFINITY;  // the distance at or below give_up_at that dropped the manoeuvre
   // The group that dropped the last manoeuvre is looked at first.
   const auto comes_within = [&](auto&& predicted, const Eigen::Vector2d& at, double within) {
-    const double beyond = give_up_at + 1e-9;
+    // A bound clears by 1e-9 m, whatever its own roundings (none of its points is then at or below give_up_at).
+    const auto clears = [beyond = give_up_at + 1e-9](double low, double) { return low > beyond; };
     const auto group_within = [&](const Group& g) {
-      if (futures && (at - g.center).norm() - g.speed * within - g.radius > beyond) return false;
-      if (worst(predicted, g.center, g.velocity) - g.radius > beyond) return false;
-      for (std::size_t i = g.first; i < g.last; ++i) {
-        if (futures && (at - moving_[i].position).norm() - g.speed * within > beyond) continue;
-        const double d = worst(predicted, moving_[i].position, g.velocity);
-        if (d <= give_up_at) {
-          reached = d;
-          dropped_by_ = static_cast<std::size_t>(&g - groups_.data());
-          return true;
-        }
-      }
-      return false;
+      return group_pass(g, predicted, at, within, clears, [&](double d) {
+        if (!(d <= give_up_at)) return false;
+        reached = d;
+        dropped_by_ = static_cast<std::size_t>(&g - groups_.data());
+        return true;
+      });
     };
     const bool hint = dropped_by_ < groups_.size();
     if (hint && group_within(groups_[dropped_by_])) return true;
