@@ -612,6 +612,15 @@ TEST(Certifier, OnlyARefusalWhileTheCommandIsHeldCarriesOverToLongerHolds) {
   EXPECT_FALSE(c.certify_held(Vec2(-2.0, 0.0), 0.5));
   EXPECT_TRUE(c.refused_while_held(0.5));
   for (const double hold : {0.6, 1.0, 1.5, 3.0}) EXPECT_FALSE(c.certify_held(Vec2(-2.0, 0.0), hold)) << hold;
+  // Just after the hold: without lag, 0.4 m/s towards a wall reaches 0.16 m by the hold's end (0.5 s) and
+  // stops 0.2 s later at 0.2 m. With the wall at 0.48 m, the clearance disk (0.3 m) still fits at the hold's end
+  // and no longer at the stop: refused after the hold, by at most 0.2 s.
+  const core::Scan wall = make_scan([](double a) { return wall_range(a, 0.48); });
+  Certifier ahead(certifier_settings());
+  ahead.begin(wall, Vec2::Zero(), Vec2::Zero(), {});
+  EXPECT_TRUE(ahead.certify_held(Vec2(0.4, 0.0), 0.05));  // the same way, braking at once
+  EXPECT_FALSE(ahead.certify_held(Vec2(0.4, 0.0), 0.5));
+  EXPECT_FALSE(ahead.refused_while_held(0.5));
 }
 
 TEST(Certifier, AStopBesideALaneKeepsTheStandoff) {
