@@ -4,7 +4,9 @@
 //   - Model::features and Model::decode allocate nothing within the reserved sizes (model.hpp, "Memory");
 //   - World::scan into a sized Scan allocates nothing (world.hpp);
 //   - Planner::plan(input, out) of LearnedPolicy (cvae, cvae-fixed-q, bc), ProjCem and the follower, given
-//     the same `out` every cycle, allocates nothing after the first cycle (planner.hpp).
+//     the same `out` every cycle, allocates nothing after the first cycle, a hold (brake) in between
+//     included (planner.hpp; PlannerOutput::resize_candidates);
+//   - Tracker::step, the robots' API, allocates nothing after its first cycle (tracker.hpp).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -22,6 +24,7 @@
 #include "occtrack/planners/follower.hpp"
 #include "occtrack/planners/learned.hpp"
 #include "occtrack/planners/planner.hpp"
+#include "occtrack/planners/tracker.hpp"
 #include "occtrack/policy/model.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/world.hpp"
@@ -278,9 +281,13 @@ TEST(AllocationCount, ModelWorkspacesGrowOncePastTheReserve) {
 namespace {
 
 constexpr std::size_t kPlannerWarmUp = 1;  // the first cycle sizes the output (plan, candidates)
+// A cycle whose target was never observed (target_age infinite): the planner holds still, with no plan and no
+// candidates (detail::brake), and may allocate its message. The cycles after it must not allocate again.
+constexpr std::size_t kHoldCycle = 20;
 
-// Replays each scenario's recording through the planner (reset first), into one reused output: the
-// allocations of each cycle after warm-up, "" when there are none, else "SCENARIO cycle K: COUNT, ...".
+// Replays each scenario's recording through the planner (reset first), into one reused output, with a hold
+// at kHoldCycle: the allocations of each cycle after warm-up but the hold, "" when there are none, else
+// "SCENARIO cycle K: COUNT, ...".
 std::string planner_allocations(planners::Planner& planner) {
   std::string found;
   for (const char* path : kScenarios) {
@@ -290,9 +297,16 @@ std::string planner_allocations(planners::Planner& planner) {
     std::vector<long> counts;
     int failures = 0;
     for (std::size_t k = 0; k < recording.inputs.size(); ++k) {
+      planners::PlannerInput input = recording.inputs[k];
+      if (k == kHoldCycle) input.target_age = INFINITY;
       AllocationCount count;
-      planner.plan(recording.inputs[k], out);
-      if (k >= kPlannerWarmUp) counts.push_back(count.allocations());
+      planner.plan(input, out);
+      const long allocations = count.allocations();
+      if (k == kHoldCycle) {
+        EXPECT_TRUE(out.ok && out.command_velocity.isZero() && out.plan.empty() && out.candidates.empty())
+            << planner.name() << ", " << path << ": the hold cycle did not hold";
+      }
+      if (k >= kPlannerWarmUp) counts.push_back(k == kHoldCycle ? 0 : allocations);  // the hold's own is not judged
       failures += !out.ok;
     }
     EXPECT_EQ(failures, 0) << planner.name() << ", " << path;
@@ -308,6 +322,34 @@ std::string planner_allocations(planners::Planner& planner) {
 }
 
 }  // namespace
+
+TEST(AllocationCount, DroppedCandidatesKeepTheirStorage) {
+  planners::PlannerOutput out;
+  out.resize_candidates(5);
+  std::vector<const planners::Vec2*> made;
+  for (auto& c : out.candidates) {
+    c.assign(100, planners::Vec2::Ones());
+    made.push_back(c.data());
+  }
+  {
+    AllocationCount count;
+    out.resize_candidates(0);
+    EXPECT_TRUE(out.candidates.empty());
+    out.resize_candidates(3);
+    ASSERT_EQ(out.candidates.size(), 3u);
+    for (auto& c : out.candidates) {
+      EXPECT_NE(std::find(made.begin(), made.end(), c.data()), made.end()) << "a trajectory's storage was not kept";
+      c.assign(100, planners::Vec2::Zero());  // within its capacity
+    }
+    out.resize_candidates(5);
+    EXPECT_EQ(count.allocations(), 0);
+  }
+  // More than ever before makes new trajectories (the count's witness).
+  AllocationCount count;
+  out.resize_candidates(8);
+  EXPECT_EQ(out.candidates.size(), 8u);
+  EXPECT_GT(count.allocations(), 0);
+}
 
 TEST(AllocationCount, LearnedPlanDoesNotAllocateAfterTheFirstCycle) {
   for (const char* variant : {"cvae", "cvae-fixed-q", "bc"}) {
@@ -357,4 +399,30 @@ TEST(AllocationCount, ProjCemPlanDoesNotAllocateAfterTheFirstCycle) {
 TEST(AllocationCount, FollowerPlanDoesNotAllocateAfterTheFirstCycle) {
   std::unique_ptr<planners::Planner> planner = planners::make_planner("follower");
   EXPECT_EQ(planner_allocations(*planner), "");
+}
+
+TEST(AllocationCount, TrackerStepDoesNotAllocateAfterTheFirstCycle) {
+  // The middleware-free API (tracker.hpp: "its storage is reused from call to call"), the safety layer on.
+  planners::TrackerSettings settings;
+  planners::Tracker tracker(settings);
+  for (const char* path : kScenarios) {
+    const Recording recording = record(path);
+    tracker.reset();
+    std::vector<long> counts;
+    int stopped = 0;
+    for (std::size_t k = 0; k < recording.inputs.size(); ++k) {
+      const planners::PlannerInput& in = recording.inputs[k];
+      const double now = 100.0 + in.time;
+      planners::RobotState robot{in.robot_position, in.robot_velocity, now};
+      planners::TargetEstimate target{in.target_position, in.target_velocity, now - in.target_age};
+      core::Scan scan = *in.scan;
+      scan.time = now;
+      AllocationCount count;
+      const planners::TrackerOutput& out = tracker.step(now, robot, target, &scan);
+      if (k >= kPlannerWarmUp) counts.push_back(count.allocations());
+      stopped += out.stopped;
+    }
+    EXPECT_EQ(stopped, 0) << path;
+    EXPECT_EQ(nonzero(counts, kPlannerWarmUp), "") << path;
+  }
 }

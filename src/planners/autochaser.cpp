@@ -117,7 +117,7 @@ void AutoChaser::plan(const PlannerInput& input, PlannerOutput& out) {
   const AutoChaserSettings& s = m.s;
   out.ok = true;
   out.message.clear();
-  out.candidates.clear();
+  out.resize_candidates(0);
   if (!input.robot_position.allFinite() || !input.robot_velocity.allFinite() || !std::isfinite(input.time))
     return detail::brake(out, m.record, clock, "autochaser: planner input: robot state is not finite");
   const bool true_future = s.waypoints > 0 && m.prior != nullptr;
@@ -220,7 +220,7 @@ void AutoChaser::plan(const PlannerInput& input, PlannerOutput& out) {
     m.have_path = false;
   }
   // The viewpoints, robot first, for figures.
-  out.candidates.resize(1);
+  out.resize_candidates(1);
   out.candidates[0].assign(1, input.robot_position);
   out.candidates[0].insert(out.candidates[0].end(), m.viewpoints.waypoints.begin(), m.viewpoints.waypoints.end());
   detail::finish(out, clock);

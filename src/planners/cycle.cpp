@@ -45,7 +45,7 @@ void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, cons
   out.message = message;
   out.command_velocity.setZero();
   out.plan.clear();
-  out.candidates.clear();
+  out.resize_candidates(0);
   record.valid = false;
   finish(out, clock);
 }

@@ -44,7 +44,7 @@ void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
   s.context.fill_row(s.optimizer.problem, 0, s.line, frame, &terminal_velocity);
   if (!s.optimizer.projector.solve(s.optimizer.problem, s.optimizer.result, &error) || s.optimizer.result.status != projection::SolveStatus::solved)
     return detail::brake(out, s.record, clock, error.empty() ? "projection produced non-finite values" : error);
-  out.candidates.clear();
+  out.resize_candidates(0);
   s.record.xi = s.optimizer.result.xi.row(0).cast<double>();
   // The follower does not rank; its record still carries what the ranking makes of its plan.
   const RankingTerms terms =

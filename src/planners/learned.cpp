@@ -330,7 +330,7 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
   const int kept = std::min(cfg.candidates_kept, B);
   std::size_t shown = 0;
   for (int b = 0; b < kept; ++b) shown += s.usable[b] && std::isfinite(s.costs[b]);
-  out.candidates.resize(shown);  // storage of earlier cycles is reused
+  out.resize_candidates(shown);  // storage of earlier cycles is reused
   for (int b = 0, c = 0; b < kept; ++b)
     if (s.usable[b] && std::isfinite(s.costs[b])) s.context.world_positions(candidate(b), frame, out.candidates[c++]);
   // Every ranked candidate's command, cheapest first, for the safety layer.

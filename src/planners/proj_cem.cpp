@@ -151,7 +151,7 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
   if (!std::isfinite(best_cost)) return detail::brake(out, s.record, clock, "no finite candidate");
   // The last iteration's samples, projected, as the figures' "candidates".
   const int kept = std::min(cfg.candidates_kept, B);
-  out.candidates.resize(static_cast<std::size_t>(kept));
+  out.resize_candidates(static_cast<std::size_t>(kept));
   for (int c = 0; c < kept; ++c) {
     s.scored = s.optimizer.result.xi.row(c).cast<double>();
     s.context.world_positions(s.scored, frame, out.candidates[static_cast<std::size_t>(c)]);

@@ -81,7 +81,7 @@ struct Tracker::Impl {
   void clear_plan() {
     out.planner.command_velocity = Vec2::Zero();
     out.planner.plan.clear();
-    out.planner.candidates.clear();
+    out.planner.resize_candidates(0);
     out.planner.ranked_commands.clear();
     out.planner.ok = false;
     out.planner.message.clear();

@@ -87,6 +87,23 @@ struct PlannerOutput {
   /// layer to fall back on; planners that do not rank leave it empty.
   std::vector<Vec2> ranked_commands;
   SafetyAction safety = SafetyAction::off;
+  /// Storage of candidates dropped by resize_candidates, taken back when the count grows again (not output).
+  std::vector<std::vector<Vec2>> spare_candidates;
+
+  /// Makes `candidates` hold n trajectories (their contents are the caller's to fill), keeping the storage of
+  /// those it drops. vector::resize and clear would free them, and the next cycle that shows more would
+  /// allocate again: with this, an output reused cycle after cycle allocates nothing once it has held n.
+  void resize_candidates(std::size_t n) {
+    for (; candidates.size() > n; candidates.pop_back()) spare_candidates.push_back(std::move(candidates.back()));
+    for (; candidates.size() < n; spare_candidates.pop_back()) {
+      if (spare_candidates.empty()) {  // more than ever before: new trajectories, and room to keep them all
+        candidates.resize(n);
+        spare_candidates.reserve(candidates.capacity());
+        break;
+      }
+      candidates.push_back(std::move(spare_candidates.back()));
+    }
+  }
 };
 
 /// One cycle's robot-centric view, as perception and the frame change make it: the robot is at the origin,
