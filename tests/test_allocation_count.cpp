@@ -281,8 +281,8 @@ TEST(AllocationCount, ModelWorkspacesGrowOncePastTheReserve) {
 namespace {
 
 constexpr std::size_t kPlannerWarmUp = 1;  // the first cycle sizes the output (plan, candidates)
-// A cycle whose target was never observed (target_age infinite): the planner holds still, with no plan and no
-// candidates (detail::brake), and may allocate its message. The cycles after it must not allocate again.
+// A cycle whose target was never observed (target_age infinite): the planner holds still, with no candidates
+// (detail::brake), and may allocate its message. The cycles after it must not allocate again.
 constexpr std::size_t kHoldCycle = 20;
 
 // Replays each scenario's recording through the planner (reset first), into one reused output, with a hold
@@ -302,10 +302,9 @@ std::string planner_allocations(planners::Planner& planner) {
       AllocationCount count;
       planner.plan(input, out);
       const long allocations = count.allocations();
-      if (k == kHoldCycle) {
-        EXPECT_TRUE(out.ok && out.command_velocity.isZero() && out.plan.empty() && out.candidates.empty())
-            << planner.name() << ", " << path << ": the hold cycle did not hold";
-      }
+      // The planner braked (the safety layer around it may still send an evasive command: a hold is not
+      // always safe among moving obstacles), so it shows no candidates.
+      if (k == kHoldCycle) EXPECT_TRUE(out.candidates.empty()) << planner.name() << ", " << path << ": no hold";
       if (k >= kPlannerWarmUp) counts.push_back(k == kHoldCycle ? 0 : allocations);  // the hold's own is not judged
       failures += !out.ok;
     }
