@@ -380,6 +380,31 @@ TEST(Certifier, StoppingDistanceBeforeAWall) {
   EXPECT_TRUE(late.certify(Vec2::Zero()));        // already braking: 0.56 + 0.3 < 1
 }
 
+TEST(Certifier, UsesTheFreeSpaceItIsGivenForTheScan) {
+  // The safety layer hands over the motion evidence's free space of the same scan instead of building it
+  // twice: the verdicts must be those of the certifier's own, and the one given must be the one used.
+  const core::Scan scan = make_scan([](double a) { return wall_range(a, 1.0); });
+  FreeSpace built;
+  built.build(scan);
+  Certifier own(certifier_settings()), given(certifier_settings());
+  for (const double speed : {0.5, 1.0, 1.5, 1.6, 1.7, 2.0}) {
+    own.begin(scan, Vec2(speed, 0.0), Vec2(speed, 0.0), {});
+    given.begin(scan, Vec2(speed, 0.0), Vec2(speed, 0.0), {}, 0.0, &built);
+    EXPECT_EQ(given.clearance(), own.clearance());
+    for (const Vec2& command : {Vec2(0.0, 0.0), Vec2(1.0, 0.0), Vec2(2.0, 0.0), Vec2(-1.0, 0.5), Vec2(0.0, 2.0)})
+      EXPECT_EQ(given.certify(command), own.certify(command)) << speed << " m/s, command " << command.transpose();
+  }
+  // A free space with the wall at 3 m instead: 1.7 m/s now stops in time, which the scan's own would refuse.
+  FreeSpace farther;
+  farther.build(make_scan([](double a) { return wall_range(a, 3.0); }));
+  given.begin(scan, Vec2(1.7, 0.0), Vec2(1.7, 0.0), {}, 0.0, &farther);
+  EXPECT_TRUE(given.certify(Vec2::Zero()));
+  EXPECT_EQ(&given.free_space(), &farther);
+  // Without one, begin() builds its own again.
+  given.begin(scan, Vec2(1.7, 0.0), Vec2(1.7, 0.0), {});
+  EXPECT_FALSE(given.certify(Vec2::Zero()));
+}
+
 TEST(Certifier, TooCloseAlreadyAllowsMovingAwayOnly) {
   // 0.28 m from a wall with a 0.3 m clearance: away is certified, closer is not.
   const core::Scan scan = make_scan([](double a) { return wall_range(a, 0.28); });

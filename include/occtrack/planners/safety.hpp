@@ -154,9 +154,11 @@ class Certifier {
 
   /// Starts a cycle. `moving` are copied (allocates only when there are more than ever before).
   /// `moving_speed`: the speed at which a moving point may run along its line of motion either way
-  /// (Settings::moving_may_turn; each point uses the larger of it and its own speed).
+  /// (Settings::moving_may_turn; each point uses the larger of it and its own speed). `built`: this very
+  /// scan's free space when the caller has built it already (FreeSpace::build(scan); it must outlive the
+  /// cycle's checks), else null and begin() builds its own.
   void begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity, const Eigen::Vector2d& previous_command,
-             const std::vector<MovingPoint>& moving, double moving_speed = 0.0);
+             const std::vector<MovingPoint>& moving, double moving_speed = 0.0, const FreeSpace* built = nullptr);
   /// True when `command` is certified (see the class comment). *min_distance, when given, receives the
   /// smallest distance between the robot's centre and a moving point over the manoeuvre (+infinity without).
   bool certify(const Eigen::Vector2d& command, double* min_distance = nullptr) const {
@@ -208,7 +210,7 @@ class Certifier {
   double clearance() const { return clearance_; }
   /// The time the candidate command is held: the replanning interval.
   double hold() const;
-  const FreeSpace& free_space() const { return free_; }
+  const FreeSpace& free_space() const { return built_ != nullptr ? *built_ : own_; }
 
  private:
   /// check()'s simulation. Without `distances`, min_distance is only kept for the points that come within the
@@ -217,7 +219,8 @@ class Certifier {
                  double give_up_at, bool futures = false) const;
 
   Settings settings_;
-  FreeSpace free_;
+  FreeSpace own_;                       // the scan's free space, when begin() was not given one
+  const FreeSpace* built_ = nullptr;    // the one begin() was given, for this cycle
   struct Checkpoint {  // where follow() checks a manoeuvre
     Eigen::Vector2d p;
     double now;
@@ -270,6 +273,8 @@ class MotionEvidence {
   /// This cycle's scan, taken at world position `robot` at `time`. Keeps a history thinned to one scan per
   /// 0.1 s over the last 1.2 s (allocates only for a scan with more beams than any before).
   void add(const core::Scan& scan, const Eigen::Vector2d& robot, double time);
+  /// The free space of the scan of the last add() (FreeSpace::build), valid until the next add() or reset().
+  const FreeSpace& free_space() const { return current_.free; }
   /// The verdict on an object given by its points (robot-centric, in the scan of the last add()).
   Verdict judge(const MovingPoint* points, std::size_t count) const;
   /// True when `point` (robot-centric, in the scan of the last add()) lies on a surface the scan of

@@ -63,8 +63,10 @@ double Certifier::hold() const {
 
 void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_velocity,
                       const Eigen::Vector2d& previous_command, const std::vector<MovingPoint>& moving,
-                      double moving_speed) {
-  free_.build(scan);
+                      double moving_speed, const FreeSpace* built) {
+  built_ = built;
+  if (built == nullptr) own_.build(scan);
+  const FreeSpace& free = free_space();
   velocity_ = robot_velocity.allFinite() ? robot_velocity : Eigen::Vector2d::Zero();
   previous_ = previous_command.allFinite() ? previous_command : Eigen::Vector2d::Zero();
   // Only the moving points that could come near: the robot cannot get farther than `reach` from here.
@@ -124,7 +126,7 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   }
   // Already closer than the clearance to something: certify against what the robot has now, so that moving
   // away is possible and moving closer is not.
-  clearance_ = std::max(0.0, std::min({settings_.clearance(), free_.nearest() - 0.005, nearest_moving - 0.005}));
+  clearance_ = std::max(0.0, std::min({settings_.clearance(), free.nearest() - 0.005, nearest_moving - 0.005}));
 }
 
 namespace {
@@ -160,6 +162,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   Verdict verdict;
   refused_at_ = INFINITY;
   const double keep = std::min(clearance, clearance_);  // the clearance kept: never more than this cycle's
+  const FreeSpace& free = free_space();
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
   if (!command.allFinite() || !std::isfinite(hold_time) || !(keep > 0.0)) return verdict;
   const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
@@ -302,7 +305,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
 
   // Every check at a checkpoint, for a verdict alone: true when it holds.
   const auto holds = [&](const Checkpoint& c) {
-    if (!free_.disk_free(c.p, keep)) return false;
+    if (!free.disk_free(c.p, keep)) return false;
     return !(c.stopped ? near_at_rest(c, true) : near_now(c, true) || (c.passive && near_reach(c)));
   };
 
@@ -349,7 +352,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
       // space first, the walk below takes it from the start (its min_distance up to there is the verdict's).
       if (searching) {
         const std::size_t last = checkpoints_.size() - 1;
-        if (!free_.disk_free(checkpoints_[last].p, keep)) break;
+        if (!free.disk_free(checkpoints_[last].p, keep)) break;
         if (now >= dropped_at_ - 1e-12 || stopped) {
           if (dropped_at(checkpoints_[last])) return drop(checkpoints_[last]);
           for (; distances_tested < last; ++distances_tested)
@@ -396,7 +399,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
     return verdict;
   }
   for (const Checkpoint& c : checkpoints_) {
-    if (!free_.disk_free(c.p, keep)) return verdict;  // leaves known-free space: neither
+    if (!free.disk_free(c.p, keep)) return verdict;  // leaves known-free space: neither
     if (c.stopped) {
       verdict.in_free_space = true;
       near_at_rest(c, false);

@@ -153,8 +153,11 @@ class Shielded final : public Planner {
           moving_.push_back({position, Eigen::Vector2d::Zero()});
       }
     }
+    // With motion evidence on, plan() added this scan to it (the same condition as the brake above), which built
+    // the scan's free space: the certifier uses that one rather than building it again.
+    const FreeSpace* built = certifier_.settings().motion_evidence ? &evidence_.free_space() : nullptr;
     certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_,
-                     fastest_moving_);
+                     fastest_moving_, built);
 
     // 1. The planner's command, then its other candidates in rank order.
     if (out.ok && planned.allFinite()) {
