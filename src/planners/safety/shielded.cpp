@@ -72,7 +72,8 @@ class Shielded final : public Planner {
     out.ranked_commands.clear();
     const auto start = Clock::now();
     const bool usable = input.scan != nullptr && input.robot_position.allFinite() && input.robot_velocity.allFinite();
-    if (usable && certifier_.settings().motion_evidence)
+    evidence_added_ = usable && certifier_.settings().motion_evidence;
+    if (evidence_added_)
       evidence_.add(*input.scan, input.robot_position, input.time);
     const auto added = Clock::now();
     observed_ = usable && perception_.process(*input.scan, input.robot_position, observation_, nullptr);
@@ -124,9 +125,8 @@ class Shielded final : public Planner {
       std::size_t kept = 0;
       for (std::size_t first = 0, last = 0; first < moving_.size(); first = last) {
         while (last < moving_.size() && moving_[last].velocity == moving_[first].velocity) ++last;
-        const MotionEvidence::Verdict verdict = certifier_.settings().motion_evidence
-                                                    ? evidence_.judge(&moving_[first], last - first)
-                                                    : MotionEvidence::Verdict::unknown;
+        const MotionEvidence::Verdict verdict =
+            evidence_added_ ? evidence_.judge(&moving_[first], last - first) : MotionEvidence::Verdict::unknown;
         if (verdict == MotionEvidence::Verdict::still &&
             !shown_moving_lately(input.robot_position, &moving_[first], last - first))
           continue;
@@ -149,13 +149,12 @@ class Shielded final : public Planner {
         // docs/safety.md). Either way moving with unknown heading (Certifier: a full disk at the fastest speed
         // seen this episode; none until something has been seen moving).
         if (moved_lately(input.robot_position + position) ||
-            (certifier_.settings().motion_evidence && fastest_moving_ > 0.0 && !evidence_.seen_before(position)))
+            (evidence_added_ && fastest_moving_ > 0.0 && !evidence_.seen_before(position)))
           moving_.push_back({position, Eigen::Vector2d::Zero()});
       }
     }
-    // With motion evidence on, plan() added this scan to it (the same condition as the brake above), which built
-    // the scan's free space: the certifier uses that one rather than building it again.
-    const FreeSpace* built = certifier_.settings().motion_evidence ? &evidence_.free_space() : nullptr;
+    // Adding this scan to the motion evidence built its free space: the certifier uses that one.
+    const FreeSpace* built = evidence_added_ ? &evidence_.free_space() : nullptr;
     certifier_.begin(*input.scan, input.robot_velocity, has_previous_ ? previous_ : input.robot_velocity, moving_,
                      fastest_moving_, built);
 
@@ -332,7 +331,8 @@ class Shielded final : public Planner {
   Certifier certifier_;
   perception::Perception perception_;
   perception::Observation observation_;
-  bool observed_ = false;    // observation_ is this cycle's
+  bool observed_ = false;        // observation_ is this cycle's
+  bool evidence_added_ = false;  // evidence_ holds this cycle's scan (plan())
   SharedPerception shared_;  // observation_, as offered to the planner
   MotionEvidence evidence_;
   std::vector<MovingPoint> moving_;
