@@ -304,7 +304,9 @@ std::string planner_allocations(planners::Planner& planner) {
       const long allocations = count.allocations();
       // The planner braked (the safety layer around it may still send an evasive command: a hold is not
       // always safe among moving obstacles), so it shows no candidates.
-      if (k == kHoldCycle) EXPECT_TRUE(out.candidates.empty()) << planner.name() << ", " << path << ": no hold";
+      if (k == kHoldCycle) {
+        EXPECT_TRUE(out.candidates.empty()) << planner.name() << ", " << path << ": no hold";
+      }
       if (k >= kPlannerWarmUp) counts.push_back(k == kHoldCycle ? 0 : allocations);  // the hold's own is not judged
       failures += !out.ok;
     }
