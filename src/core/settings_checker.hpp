@@ -5,24 +5,37 @@
 //   c.require(steps >= 4, "steps (", steps, ") must be at least 4");
 //   c.finite(horizon, "horizon");
 //   return c.done(error);
+//
+// Numbers are written as an ostream with precision 12 writes them (printf's "%.12g"), but with
+// std::to_chars, into a string: a checker given a kept string (the Tracker's) formats its message without
+// touching the heap while the message fits that string's capacity.
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
 
 namespace occtrack::detail {
 
 class SettingsChecker {
  public:
+  /// The message goes into the checker's own string.
+  SettingsChecker() : message_(own_) {}
+  /// The message goes into `sink`, which is cleared; its storage is reused.
+  explicit SettingsChecker(std::string& sink) : message_(sink) { message_.clear(); }
+  SettingsChecker(const SettingsChecker&) = delete;
+  SettingsChecker& operator=(const SettingsChecker&) = delete;
+
   template <typename... Parts>
   void require(bool ok, const Parts&... parts) {
     if (ok || !message_.empty()) return;
-    std::ostringstream out;
-    out.precision(12);
-    (out << ... << parts);
-    message_ = out.str();
+    (append(parts), ...);
+    if (message_.empty()) message_ = "invalid setting";  // an empty message would read as "no failure"
   }
   void finite(double value, const char* field) {
     require(std::isfinite(value), field, " must be a finite number, got ", value);
@@ -43,12 +56,39 @@ class SettingsChecker {
   const std::string& message() const { return message_; }
   /// True when every rule held; otherwise false, with *error (when given) the first broken rule.
   bool done(std::string* error) const {
-    if (error && !message_.empty()) *error = message_;
+    if (error && error != &message_ && !message_.empty()) *error = message_;
     return message_.empty();
   }
 
  private:
-  std::string message_;
+  template <typename T>
+  void append(const T& part) {
+    using U = std::decay_t<T>;
+    if constexpr (std::is_same_v<U, bool>) {
+      message_ += part ? '1' : '0';  // as an ostream without boolalpha
+    } else if constexpr (std::is_same_v<U, char>) {
+      message_ += part;
+    } else if constexpr (std::is_convertible_v<const T&, std::string_view>) {
+      message_ += std::string_view(part);
+    } else if constexpr (std::is_integral_v<U>) {
+      char text[24];
+      const std::to_chars_result r = std::to_chars(text, text + sizeof text, part);
+      message_.append(text, r.ptr);
+    } else if constexpr (std::is_same_v<U, double> || std::is_same_v<U, float>) {
+      char text[32];  // "%.12g" needs at most 19 characters
+      const std::to_chars_result r =
+          std::to_chars(text, text + sizeof text, static_cast<double>(part), std::chars_format::general, 12);
+      message_.append(text, r.ptr);
+    } else {  // anything else an ostream can write
+      std::ostringstream out;
+      out.precision(12);
+      out << part;
+      message_ += out.str();
+    }
+  }
+
+  std::string own_;
+  std::string& message_;
 };
 
 /// `settings` when settings.validate() holds; otherwise throws std::invalid_argument "WHO: <its message>".
