@@ -4,9 +4,10 @@
 //   - Model::features and Model::decode allocate nothing within the reserved sizes (model.hpp, "Memory");
 //   - World::scan into a sized Scan allocates nothing (world.hpp);
 //   - Planner::plan(input, out) of LearnedPolicy (cvae, cvae-fixed-q, bc), ProjCem and the follower, given
-//     the same `out` every cycle, allocates nothing after the first cycle, a hold (brake) in between
-//     included (planner.hpp; PlannerOutput::resize_candidates);
-//   - Tracker::step, the robots' API, allocates nothing after its first cycle (tracker.hpp).
+//     the same `out` every cycle, allocates nothing after the first cycle, holds (brakes) in between
+//     included, all but the first (planner.hpp; PlannerOutput::resize_candidates);
+//   - Tracker::step, the robots' API, allocates nothing after its first cycle (tracker.hpp), stop cycles
+//     included from the first.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -281,13 +282,15 @@ TEST(AllocationCount, ModelWorkspacesGrowOncePastTheReserve) {
 namespace {
 
 constexpr std::size_t kPlannerWarmUp = 1;  // the first cycle sizes the output (plan, candidates)
-// A cycle whose target was never observed (target_age infinite): the planner holds still, with no candidates
-// (detail::brake), and may allocate its message. The cycles after it must not allocate again.
+// Cycles whose target was never observed (target_age infinite): the planner holds still, with no candidates
+// (detail::brake). The first hold may size the output's message; the second hold, and the cycles after it,
+// must not allocate.
 constexpr std::size_t kHoldCycle = 20;
+constexpr std::size_t kHoldCycles = 2;
 
-// Replays each scenario's recording through the planner (reset first), into one reused output, with a hold
-// at kHoldCycle: the allocations of each cycle after warm-up but the hold, "" when there are none, else
-// "SCENARIO cycle K: COUNT, ...".
+// Replays each scenario's recording through the planner (reset first), into one reused output, with holds
+// from kHoldCycle: the allocations of each cycle after warm-up but the first hold, "" when there are none,
+// else "SCENARIO cycle K: COUNT, ...".
 std::string planner_allocations(planners::Planner& planner) {
   std::string found;
   for (const char* path : kScenarios) {
@@ -298,16 +301,18 @@ std::string planner_allocations(planners::Planner& planner) {
     int failures = 0;
     for (std::size_t k = 0; k < recording.inputs.size(); ++k) {
       planners::PlannerInput input = recording.inputs[k];
-      if (k == kHoldCycle) input.target_age = INFINITY;
+      const bool hold = k >= kHoldCycle && k < kHoldCycle + kHoldCycles;
+      if (hold) input.target_age = INFINITY;
       AllocationCount count;
       planner.plan(input, out);
       const long allocations = count.allocations();
       // The planner braked (the safety layer around it may still send an evasive command: a hold is not
       // always safe among moving obstacles), so it shows no candidates.
-      if (k == kHoldCycle) {
+      if (hold) {
         EXPECT_TRUE(out.candidates.empty()) << planner.name() << ", " << path << ": no hold";
       }
-      if (k >= kPlannerWarmUp) counts.push_back(k == kHoldCycle ? 0 : allocations);  // the hold's own is not judged
+      // The first hold's own count is not judged.
+      if (k >= kPlannerWarmUp) counts.push_back(k == kHoldCycle ? 0 : allocations);
       failures += !out.ok;
     }
     EXPECT_EQ(failures, 0) << planner.name() << ", " << path;
@@ -426,4 +431,49 @@ TEST(AllocationCount, TrackerStepDoesNotAllocateAfterTheFirstCycle) {
     EXPECT_EQ(stopped, 0) << path;
     EXPECT_EQ(nonzero(counts, kPlannerWarmUp), "") << path;
   }
+}
+
+TEST(AllocationCount, TrackerStopsDoNotAllocate) {
+  // A robot that has lost its target, or whose sensor fails, runs stop cycles for as long as that lasts: each
+  // formats its reason into the output's kept string (tracker.cpp, docs/ros.md "Memory"), from the first one.
+  planners::TrackerSettings settings;
+  planners::Tracker tracker(settings);
+  const Recording recording = record(kScenarios[1]);
+  enum Fault { none, stale_target, nan_robot, scan_mostly_nan, scan_gap, future_scan, nan_now, count };
+  const char* const expected[] = {"", "target: stale", "robot: position (nan", "scan: only ", "scan: 11 unusable beams",
+                                  "scan: stamp is ", "time: now must be"};
+  std::vector<long> counts;
+  int stopped = 0;
+  for (std::size_t k = 0; k < recording.inputs.size(); ++k) {
+    const planners::PlannerInput& in = recording.inputs[k];
+    // The first cycle tracks (it sizes the plan's storage); then a fault every other cycle, each kind in turn.
+    const Fault fault = (k == 0 || k % 2 == 1) ? none : static_cast<Fault>(1 + (k / 2) % (count - 1));
+    double now = 100.0 + in.time;
+    planners::RobotState robot{in.robot_position, in.robot_velocity, now};
+    planners::TargetEstimate target{in.target_position, in.target_velocity, now - in.target_age};
+    core::Scan scan = *in.scan;
+    scan.time = now;
+    switch (fault) {
+      case stale_target: target.stamp = now - 2.0 * settings.target_timeout; break;
+      case nan_robot: robot.position.x() = NAN; break;
+      case scan_mostly_nan: std::fill(scan.ranges.begin(), scan.ranges.end() - 10, NAN); break;
+      case scan_gap: std::fill(scan.ranges.begin() + 100, scan.ranges.begin() + 111, NAN); break;  // 11 beams, 0.19 rad
+      case future_scan: scan.time = now + 1.0; break;
+      case nan_now: now = NAN; break;
+      default: break;
+    }
+    AllocationCount count_here;
+    const planners::TrackerOutput& out = tracker.step(now, robot, target, &scan);
+    const long allocations = count_here.allocations();
+    if (k == 0) continue;
+    counts.push_back(allocations);
+    EXPECT_EQ(out.stopped, fault != none) << "cycle " << k << ": " << out.reason;
+    EXPECT_EQ(out.reason.rfind(expected[fault], 0), 0u) << "cycle " << k << ": " << out.reason;
+    if (fault != none) {
+      EXPECT_TRUE(out.command.isZero()) << "cycle " << k;
+    }
+    stopped += out.stopped;
+  }
+  EXPECT_GE(stopped, 25);
+  EXPECT_EQ(nonzero(counts, 1), "");
 }

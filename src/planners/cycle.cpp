@@ -40,9 +40,9 @@ bool validate_cycle(const projection::Settings& projection, const perception::Se
 
 void finish(PlannerOutput& out, const CycleClock& clock) { out.compute_ms = clock.elapsed_ms(); }
 
-void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, const std::string& message) {
+void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, std::string_view message) {
   out.ok = false;
-  out.message = message;
+  out.message.assign(message);
   out.command_velocity.setZero();
   out.plan.clear();
   out.resize_candidates(0);

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "../core/settings_checker.hpp"
@@ -67,8 +68,8 @@ class CycleClock {
 /// The end of every cycle: out.compute_ms from the clock.
 void finish(PlannerOutput& out, const CycleClock& clock);
 /// A cycle without a usable plan: zero command, empty plan and candidates (storage kept), ok = false with
-/// `message`, the record invalidated, and finish().
-void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, const std::string& message);
+/// `message` (copied into out.message, whose storage is kept), the record invalidated, and finish().
+void brake(PlannerOutput& out, PlanRecord& record, const CycleClock& clock, std::string_view message);
 
 /// Protocol v2: a target never observed (input.target_age +infinity) leaves nothing to track. Then the cycle
 /// commands zero velocity (the robot brakes to a stop under its acceleration bound), ok = true with a message

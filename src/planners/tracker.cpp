@@ -7,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "../core/settings_checker.hpp"
@@ -18,6 +19,7 @@ namespace {
 using Checker = occtrack::detail::SettingsChecker;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kDegrees = 180.0 / std::numbers::pi;
+constexpr std::size_t kReasonCapacity = 512;  // every stop reason's length, a scan's gap message (~170) the longest
 
 /// A range the scan can be believed for: a return (> 0) or no return (+infinity, or beyond range_max).
 bool usable(double range) { return range > 0.0; }  // false for NaN, -infinity, 0 and negative ranges
@@ -72,11 +74,16 @@ struct Tracker::Impl {
   double epoch = 0.0;     // `now` of the first step (or of the last clock jump): internal times start there
   double last_now = 0.0;
 
-  // Zero command with the reason; the planner's plan and candidates cleared (storage kept).
-  void stop(std::string reason) {
+  // Zero command; out.reason says why. The checks write their message straight into out.reason (a Checker
+  // given it), and the others assign theirs: its storage, reserved at construction, is kept, so a stop cycle
+  // allocates nothing either while the reason fits (docs/ros.md, "Memory").
+  void stop() {
     out.command = Vec2::Zero();
     out.stopped = true;
-    out.reason = std::move(reason);
+  }
+  void stop(std::string_view reason, std::string_view detail = {}) {
+    out.reason.assign(reason).append(detail);
+    stop();
   }
   void clear_plan() {
     out.planner.command_velocity = Vec2::Zero();
@@ -89,16 +96,17 @@ struct Tracker::Impl {
     out.planner.compute_ms = 0.0;
   }
 
-  bool prepare_scan(const core::Scan& in, double now, std::string* why);
+  bool prepare_scan(const core::Scan& in, double now);
   void step(double now, const RobotState& robot, const TargetEstimate& target, const core::Scan* in);
 };
 
 // Checks `in` and copies it into `scan` with angles increasing and every run of unusable beams filled with the
-// smaller range of the usable beams around it (header comment).
-bool Tracker::Impl::prepare_scan(const core::Scan& in, double now, std::string* why) {
+// smaller range of the usable beams around it (header comment). False, with out.reason saying why, when `in`
+// cannot be used.
+bool Tracker::Impl::prepare_scan(const core::Scan& in, double now) {
   const TrackerSettings& s = settings;
   const std::size_t n = in.ranges.size();
-  Checker c;
+  Checker c(out.reason);
   c.require(n > 0, "scan: no beams");
   c.require(std::isfinite(in.angle_min), "scan: angle_min must be a finite number, got ", in.angle_min);
   c.require(std::isfinite(in.angle_increment) && in.angle_increment != 0.0, "scan: angle_increment (",
@@ -112,7 +120,7 @@ bool Tracker::Impl::prepare_scan(const core::Scan& in, double now, std::string* 
   const std::size_t good = c.ok() ? static_cast<std::size_t>(std::count_if(in.ranges.begin(), in.ranges.end(), usable)) : 0;
   c.require(static_cast<double>(good) >= s.min_valid_share * static_cast<double>(n), "scan: only ", good, " of ", n,
             " beams usable (not NaN, -inf or <= 0); min_valid_share is ", s.min_valid_share);
-  if (!c.done(why)) return false;
+  if (!c.ok()) return false;
 
   // Angles increasing (a sensor mounted upside down reports a negative increment): the safety layer wants it.
   scan.range_max = in.range_max;
@@ -147,7 +155,7 @@ bool Tracker::Impl::prepare_scan(const core::Scan& in, double now, std::string* 
       c.require(false, "scan: ", j - i, " unusable beams in a row around bearing ",
                 std::remainder(middle, kTwoPi) * kDegrees, " deg leave a gap of ", gap * kDegrees,
                 " deg (max_invalid_gap ", s.max_invalid_gap * kDegrees, " deg)");
-      return c.done(why);
+      return false;
     }
     double fill = INFINITY;
     if (circular || i > 0) fill = std::min(fill, r[(i - 1) % n]);
@@ -172,7 +180,7 @@ void Tracker::Impl::step(double now, const RobotState& robot, const TargetEstima
   last_now = now;
 
   const TrackerSettings& s = settings;
-  Checker c;
+  Checker c(out.reason);
   check_vector(c, "robot: position", robot.position);
   check_vector(c, "robot: velocity", robot.velocity);
   check_stamp(c, "robot", robot.stamp, now, s.future_tolerance, s.robot_timeout, "robot_timeout");
@@ -180,8 +188,7 @@ void Tracker::Impl::step(double now, const RobotState& robot, const TargetEstima
   check_vector(c, "target: velocity", target.velocity);
   check_stamp(c, "target", target.stamp, now, s.future_tolerance, s.target_timeout, "target_timeout");
   c.require(in != nullptr, "scan: none received");
-  std::string why;
-  if (!c.done(&why) || !prepare_scan(*in, now, &why)) return stop(std::move(why));
+  if (!c.ok() || !prepare_scan(*in, now)) return stop();
 
   PlannerInput input;
   input.time = now - epoch;
@@ -192,13 +199,14 @@ void Tracker::Impl::step(double now, const RobotState& robot, const TargetEstima
   input.target_age = std::max(0.0, now - target.stamp);  // the planner extrapolates the estimate by its age
   input.scan = &scan;
   planner->plan(input, out.planner);
-  if (!out.planner.ok) return stop("planner: " + out.planner.message);
+  if (!out.planner.ok) return stop("planner: ", out.planner.message);
   if (!out.planner.command_velocity.allFinite()) return stop("planner: non-finite command");  // never expected
   out.command = out.planner.command_velocity;
 }
 
 Tracker::Tracker(const TrackerSettings& settings) : impl_(std::make_unique<Impl>()) {
   impl_->settings = occtrack::detail::checked(settings, "tracker");
+  impl_->out.reason.reserve(kReasonCapacity);
   try {
     impl_->planner = make_planner(settings.planner, settings.options);
   } catch (const std::exception& e) {
@@ -223,7 +231,7 @@ const TrackerOutput& Tracker::step(double now, const RobotState& robot, const Ta
     impl_->step(now, robot, target, scan);
   } catch (const std::exception& e) {  // planners do not throw; an allocation failure could
     impl_->clear_plan();
-    impl_->stop(std::string("tracker: ") + e.what());
+    impl_->stop("tracker: ", e.what());
   }
   return impl_->out;
 }
