@@ -37,7 +37,9 @@ Eigen::VectorXd kkt_solution(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
 void expect_kkt(const core::QpProblem& p, const core::QpResult& r, double tol) {
   const Eigen::VectorXd stationarity = p.H * r.x + p.g + p.A.transpose() * r.nu + p.C.transpose() * r.lambda;
   EXPECT_LT(stationarity.lpNorm<Eigen::Infinity>(), tol);
-  if (p.A.rows() > 0) EXPECT_LT((p.A * r.x - p.b).lpNorm<Eigen::Infinity>(), tol);
+  if (p.A.rows() > 0) {
+    EXPECT_LT((p.A * r.x - p.b).lpNorm<Eigen::Infinity>(), tol);
+  }
   for (int i = 0; i < p.C.rows(); ++i) {
     const double slack = p.d(i) - p.C.row(i).dot(r.x);
     EXPECT_GT(slack, -tol) << "inequality " << i;
