@@ -16,12 +16,32 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "bridge.hpp"
 #include "conversions.hpp"
 
 namespace occtrack::ros_adapter {
 namespace {
+
+/// What a reason says, without its numbers: "target: stale, # s old (target_timeout # s)". A stop's reason
+/// can carry a figure that changes every tick (a stale estimate's age); the log shows a reason when this
+/// changes, so that one stop is one line, not one a tick.
+std::string log_key(const std::string& reason) {
+  std::string key;
+  key.reserve(reason.size());
+  for (std::size_t i = 0; i < reason.size();) {
+    const auto digit = [&](std::size_t k) { return k < reason.size() && reason[k] >= '0' && reason[k] <= '9'; };
+    if (digit(i) || (reason[i] == '-' && digit(i + 1))) {
+      ++i;
+      while (i < reason.size() && (digit(i) || reason[i] == '.')) ++i;
+      key += '#';
+    } else {
+      key += reason[i++];
+    }
+  }
+  return key;
+}
 
 class TrackerNode {
  public:
@@ -123,10 +143,11 @@ class TrackerNode {
       publish_plan(out, now);
     }
     cmd_pub_.publish(twist);
-    if (reason != last_reason_) {  // log changes only: a stop lasts many cycles
+    std::string key = log_key(reason);
+    if (key != last_logged_) {  // log changes only: a stop lasts many cycles
       if (reason.empty()) ROS_INFO("occtrack: tracking");
       else ROS_WARN("occtrack: stopped: %s", reason.c_str());
-      last_reason_ = reason;
+      last_logged_ = std::move(key);
     }
     std_msgs::String status;
     status.data = reason.empty() ? "tracking" : "stopped: " + reason;
@@ -159,7 +180,7 @@ class TrackerNode {
   nav_msgs::Odometry::ConstPtr odom_;
   std::optional<Stamped> target_;
   std::string target_frame_;
-  std::string last_reason_ = "(none yet)";
+  std::string last_logged_ = "(none yet)";  // log_key of the last reason logged
   core::Scan scan_;  // reused from cycle to cycle
   nav_msgs::Path path_;
   visualization_msgs::MarkerArray markers_;

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The ROS 1 closed-loop test (ctest ros.closed_loop, label "ros"; docs/ros.md): a real roscore on a free port,
 # the simulator on a short scenario, the occtrack node, and the checker, which judges cmd_vel, status and
-# target_visible and then injects a NaN scan and a stale target (ros/test/check_node.cpp has the thresholds).
+# target_visible and then injects a NaN scan and a stale target (ros/test/check_node.cpp has the thresholds);
+# last, the node's log must show each of those two stops once.
 # Everything runs under a temporary ROS_HOME and is stopped on exit, pass or fail. No display needed.
 #
 #   closed_loop.sh NODE SIM CHECK SCENARIO
@@ -55,3 +56,11 @@ done
 start sim "$sim" __name:=occtrack_ros_sim _scenario:="$scenario" _yaw:=0.7 _yaw_rate:=0.2
 start node "$node" __name:=occtrack_ros _rate:=20
 timeout 110 "$check" __name:=occtrack_ros_check _rate:=20 _duration:=8 _sim:=/occtrack_ros_sim
+
+# Each stop is logged once, not once a tick: the stale target's reason carries its age, which changes every
+# tick (the node logs when a reason changes other than in its numbers).
+for stop in "scan: only" "target: stale"; do
+  lines=$(grep -c "occtrack: stopped: $stop" "$work/node.log" || true)
+  echo "node log: $lines line(s) for \"stopped: $stop\""
+  [[ $lines == 1 ]] || { echo "expected the stop \"$stop\" logged once"; exit 1; }
+done
