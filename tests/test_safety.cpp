@@ -14,6 +14,7 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/planner.hpp"
+#include "occtrack/core/robot_response.hpp"
 #include "occtrack/planners/safety.hpp"
 #include "occtrack/sim/episode.hpp"
 #include "occtrack/sim/world.hpp"
@@ -406,18 +407,53 @@ TEST(Certifier, UsesTheFreeSpaceItIsGivenForTheScan) {
 }
 
 TEST(Certifier, TooCloseAlreadyAllowsMovingAwayOnly) {
-  // 0.28 m from a wall with a 0.3 m clearance: away is certified, closer is not.
+  // 0.28 m from a wall with a 0.3 m clearance, at rest: away is certified, closer is not, not even by a
+  // millimetre (the clearance is what the robot has where it stands, to 0.1 mm, rounded down).
   const core::Scan scan = make_scan([](double a) { return wall_range(a, 0.28); });
   Certifier c(certifier_settings());
   c.begin(scan, Vec2::Zero(), Vec2::Zero(), {});
-  EXPECT_NEAR(c.clearance(), 0.275, 1e-12);
+  EXPECT_LE(c.clearance(), 0.28);
+  EXPECT_GE(c.clearance(), 0.28 - 1e-4);
   EXPECT_TRUE(c.certify(Vec2::Zero()));
   EXPECT_TRUE(c.certify(Vec2(-1.0, 0.0)));
+  EXPECT_TRUE(c.certify(Vec2(-0.02, 0.0)));
   EXPECT_TRUE(c.certify_held(Vec2(-1.0, 0.0), 0.5));
   EXPECT_FALSE(c.certify_held(Vec2(1.0, 0.0), 0.5));  // 0.2 m closer
-  // One period towards it moves the robot 5 mm: within the 5 mm the clearance keeps, not beyond.
-  EXPECT_TRUE(c.certify(Vec2(1.0, 0.0)));
-  EXPECT_FALSE(c.certify_held(Vec2(2.0, 0.0), 0.1));  // 2 cm
+  for (const double speed : {1.0, 0.1, 0.05, 0.02})  // one period: 5, 5, 2.5 and 1 mm closer (and braking)
+    EXPECT_FALSE(c.certify(Vec2(speed, 0.0))) << speed << " m/s towards the wall";
+}
+
+TEST(Certifier, InsideTheClearanceNudgesDoNotAddUp) {
+  // A robot standing inside the clearance, asked again and again for a slow step towards a wall: whatever is
+  // certified, cycle after cycle, must leave it no closer (with the 5 mm of slack the clearance kept before,
+  // each step took it up to 5 mm closer, and a robot beside a box crept into it: docs/safety.md).
+  const planners::safety::Settings settings = certifier_settings(0.25);
+  const core::RobotResponse response{settings.response_time, settings.accel_max, settings.step};
+  Certifier c(settings);
+  double wall = 0.29;
+  Vec2 velocity = Vec2::Zero(), previous = Vec2::Zero();
+  int sent = 0;
+  for (int cycle = 0; cycle < 200; ++cycle) {
+    c.begin(make_scan([&](double a) { return wall_range(a, wall); }), velocity, previous, {});
+    const Vec2 asked = cycle % 4 == 0 ? Vec2(0.1, 0.0) : Vec2::Zero();  // a nudge, then standing still
+    const Vec2 command = c.certify(asked) ? asked : Vec2::Zero();
+    sent += command != Vec2::Zero();
+    // The robot's response over one period (the certifier's own model), and the wall as the robot sees it.
+    for (int k = 0; k < 5; ++k) {
+      velocity += core::velocity_change(velocity, command, response.lag(), response.limit());
+      wall -= velocity.x() * settings.step;
+    }
+    previous = command;
+  }
+  EXPECT_EQ(sent, 0);
+  EXPECT_GE(wall, 0.29 - 1e-9);
+  // Moving towards the wall inside the clearance, braking stays certified (it is what the robot will do anyway);
+  // a command no gentler than braking is not.
+  c.begin(make_scan([](double a) { return wall_range(a, 0.29); }), Vec2(0.1, 0.0), Vec2(0.1, 0.0), {});
+  EXPECT_GT(c.clearance(), 0.2);
+  EXPECT_TRUE(c.certify(Vec2::Zero()));
+  EXPECT_TRUE(c.certify(Vec2(-0.5, 0.0)));
+  EXPECT_FALSE(c.certify(Vec2(0.1, 0.0)));
 }
 
 TEST(Certifier, MovingPointsAndEvasion) {

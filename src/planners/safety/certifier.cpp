@@ -124,9 +124,51 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
     groups_.push_back(g);
     i = end;
   }
-  // Already closer than the clearance to something: certify against what the robot has now, so that moving
-  // away is possible and moving closer is not.
-  clearance_ = std::max(0.0, std::min({settings_.clearance(), free.nearest() - 0.005, nearest_moving - 0.005}));
+  // Already closer than the clearance to a return of the scan: certify against what the robot cannot avoid,
+  // the full brake (the previous command until the latency has passed, then zero), so that moving away is
+  // possible and moving closer than braking would take it is not. The clearance is the largest at which every
+  // checkpoint of the brake is in known-free space, found by bisection to 0.1 mm and rounded down; at rest
+  // that is the robot's own spot. (It was the nearest return less 5 mm, and those 5 mm a cycle added up: a
+  // robot standing beside a box crept into it, docs/safety.md "Creeping into a static obstacle".)
+  double kept = settings_.clearance();
+  if (free.nearest() < kept) {
+    checkpoints_.clear();
+    const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
+    const double lag = response.lag(), limit = response.limit(), dt = settings_.step, L = settings_.latency;
+    const double max_gap = moving_.empty() ? 0.1 : 0.02;
+    const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
+    Eigen::Vector2d p = zero, v = velocity_;
+    double travelled = 0.0, since_check = 0.0;
+    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
+    for (long k = 0; k < steps; ++k) {
+      const double t = k * dt;
+      v += core::velocity_change(v, t < L - 1e-12 ? previous_ : zero, lag, limit);
+      p += v * dt;
+      travelled += v.norm() * dt;
+      since_check += dt;
+      const bool stopped = t + dt >= L - 1e-12 && v.norm() < 5e-3;
+      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
+      travelled = since_check = 0.0;
+      checkpoints_.push_back({p, t + dt, stopped, false});
+      if (stopped) break;
+    }
+    const auto brake_free = [&](double c) {
+      for (const Checkpoint& c_k : checkpoints_)
+        if (!free.disk_free(c_k.p, c)) return false;
+      return true;
+    };
+    double lo = 0.0, hi = std::min(kept, free.nearest());
+    if (brake_free(hi)) {
+      lo = hi;
+    } else if (brake_free(lo)) {
+      while (hi - lo > 1e-4) {
+        const double mid = 0.5 * (lo + hi);
+        (brake_free(mid) ? lo : hi) = mid;
+      }
+    }
+    kept = lo;
+  }
+  clearance_ = std::max(0.0, std::min(kept, nearest_moving - 0.005));
 }
 
 namespace {
