@@ -19,7 +19,7 @@ namespace {
 using Checker = occtrack::detail::SettingsChecker;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kDegrees = 180.0 / std::numbers::pi;
-constexpr std::size_t kReasonCapacity = 512;  // every stop reason's length, a scan's gap message (~170) the longest
+constexpr std::size_t kReasonCapacity = 512;  // the Tracker's own reasons are under 200 characters
 
 /// A range the scan can be believed for: a return (> 0) or no return (+infinity, or beyond range_max).
 bool usable(double range) { return range > 0.0; }  // false for NaN, -infinity, 0 and negative ranges
