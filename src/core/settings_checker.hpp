@@ -13,7 +13,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -79,13 +78,12 @@ class SettingsChecker {
       const std::to_chars_result r =
           std::to_chars(text, text + sizeof text, static_cast<double>(part), std::chars_format::general, 12);
       message_.append(text, r.ptr);
-    } else {  // anything else an ostream can write
-      std::ostringstream out;
-      out.precision(12);
-      out << part;
-      message_ += out.str();
+    } else {
+      static_assert(kNotWritten<U>, "a message part is text, a character, an integer or floating point");
     }
   }
+  template <typename>
+  static constexpr bool kNotWritten = false;
 
   std::string own_;
   std::string& message_;
