@@ -43,6 +43,42 @@ double pseudo_angle(const Eigen::Vector2d& v) {
   const double r = v.y() / sum;  // -1 .. 1
   return v.x() >= 0.0 ? r : (v.y() >= 0.0 ? 2.0 - r : -2.0 - r);
 }
+
+/// A manoeuvre through the robot's response, from the origin at `velocity`, step by step: `previous` until the
+/// latency, `command` until `hold_end`, then zero (braking). Checked every check_spacing of travel and at least
+/// every 0.1 s (0.02 s where there are `moving` points), and where it has stopped while braking, the last: under
+/// 5 mm/s, the robot stays where it is from there on (what is left to travel, under 5 mm/s * (tau + step), is
+/// well inside the margin). `at(p, now, stopped, passive)` takes each checkpoint and returns false to end the
+/// walk there; `passive`: still moving enough for passive safety (while braking, under 5 cm/s counts as stopped:
+/// what is left to travel, under 5 cm/s * (tau + step), is negligible against the moving points' reach, which
+/// would otherwise keep growing through the lag's exponential tail). One home for follow()'s walk and for
+/// begin()'s full brake.
+template <class At>
+void walk(const Settings& s, const Eigen::Vector2d& velocity, const Eigen::Vector2d& previous,
+          const Eigen::Vector2d& command, double hold_end, bool moving, At&& at) {
+  const double max_gap = moving ? 0.02 : 0.1;
+  const core::RobotResponse response{s.response_time, s.accel_max, s.step};
+  const double lag = response.lag(), limit = response.limit(), dt = s.step, L = s.latency;
+  const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
+  Eigen::Vector2d p = zero, v = velocity;
+  double travelled = 0.0, since_check = 0.0;
+  const long steps = static_cast<long>(std::ceil(s.horizon / dt));
+  for (long k = 0; k < steps; ++k) {
+    const double t = k * dt;  // the step's start; its command
+    const Eigen::Vector2d* u = t < L - 1e-12 ? &previous : (t < hold_end - 1e-12 ? &command : &zero);
+    v += core::velocity_change(v, *u, lag, limit);
+    p += v * dt;
+    const double speed = v.norm();
+    travelled += speed * dt;
+    since_check += dt;
+    const double now = t + dt;
+    const bool braking = now >= hold_end - 1e-12;
+    const bool stopped = braking && speed < 5e-3;
+    if (travelled < s.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
+    travelled = since_check = 0.0;
+    if (!at(p, now, stopped, !(braking && speed < 0.05)) || stopped) return;
+  }
+}
 }  // namespace
 
 Certifier::Certifier(const Settings& settings) : settings_(occtrack::detail::checked(settings, "safety")) {
@@ -133,25 +169,12 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   double kept = settings_.clearance();
   if (free.nearest() < kept) {
     checkpoints_.clear();
-    const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
-    const double lag = response.lag(), limit = response.limit(), dt = settings_.step, L = settings_.latency;
-    const double max_gap = moving_.empty() ? 0.1 : 0.02;
     const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
-    Eigen::Vector2d p = zero, v = velocity_;
-    double travelled = 0.0, since_check = 0.0;
-    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
-    for (long k = 0; k < steps; ++k) {
-      const double t = k * dt;
-      v += core::velocity_change(v, t < L - 1e-12 ? previous_ : zero, lag, limit);
-      p += v * dt;
-      travelled += v.norm() * dt;
-      since_check += dt;
-      const bool stopped = t + dt >= L - 1e-12 && v.norm() < 5e-3;
-      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
-      travelled = since_check = 0.0;
-      checkpoints_.push_back({p, t + dt, stopped, false});
-      if (stopped) break;
-    }
+    walk(settings_, velocity_, previous_, zero, settings_.latency, !moving_.empty(),
+         [&](const Eigen::Vector2d& p, double now, bool stopped, bool) {
+           checkpoints_.push_back({p, now, stopped, false});
+           return true;
+         });
     const auto brake_free = [&](double c) {
       for (const Checkpoint& c_k : checkpoints_)
         if (!free.disk_free(c_k.p, c)) return false;
@@ -207,11 +230,7 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   const FreeSpace& free = free_space();
   // Nothing known free around the robot (no usable scan), or already in contact: nothing to certify.
   if (!command.allFinite() || !std::isfinite(hold_time) || !(keep > 0.0)) return verdict;
-  const core::RobotResponse response{settings_.response_time, settings_.accel_max, settings_.step};
-  const double lag = response.lag(), limit = response.limit(), dt = settings_.step;
-  const double L = settings_.latency, hold_end = L + std::max(hold(), hold_time);
-  // Between two checks the robot travels at most check_spacing, and no more than this much time passes.
-  const double max_gap = moving_.empty() ? 0.1 : 0.02;
+  const double hold_end = settings_.latency + std::max(hold(), hold_time);
 
   const bool verdict_only = !to_the_end && !distances;
   near_groups_.clear();
@@ -354,57 +373,46 @@ Certifier::Verdict Certifier::follow(const Eigen::Vector2d& command, double hold
   // The manoeuvre, step by step, and where it is checked.
   checkpoints_.clear();
   long hinted = -1;  // the checkpoint looked at first, if any
-  {
-    const Eigen::Vector2d zero = Eigen::Vector2d::Zero();
-    Eigen::Vector2d p = zero, v = velocity_;
-    double travelled = 0.0, since_check = 0.0;
-    const long steps = static_cast<long>(std::ceil(settings_.horizon / dt));
-    for (long k = 0; k < steps; ++k) {
-      const double t = k * dt;  // the step's start; its command
-      const Eigen::Vector2d* u = t < L - 1e-12 ? &previous_ : (t < hold_end - 1e-12 ? &command : &zero);
-      v += core::velocity_change(v, *u, lag, limit);
-      p += v * dt;
-      const double speed = v.norm();
-      travelled += speed * dt;
-      since_check += dt;
-      const double now = t + dt;
-      const bool braking = now >= hold_end - 1e-12;
-      // Stopped: from here on the robot stays where it is (what is left to travel, under 5 mm/s * (tau + step),
-      // is well inside the margin), so the rest is one check in closed form.
-      const bool stopped = braking && speed < 5e-3;
-      if (travelled < settings_.check_spacing && since_check < max_gap - 1e-12 && !stopped) continue;
-      travelled = since_check = 0.0;
-      // Passive safety holds while the robot moves: stopped here once under 5 cm/s while braking (what is left
-      // to travel, under 5 cm/s * (tau + step), is negligible against the reach, which would otherwise keep
-      // growing through the lag's exponential tail).
-      checkpoints_.push_back({p, now, stopped, !(braking && speed < 0.05)});
-      // Only the verdict counts: the checkpoint where the last refused manoeuvre failed, looked at as soon as
-      // this one gets there. Candidates are often alike, and fail alike: the rest of the way is then spared.
-      if (verdict_only && hinted < 0 && now >= failed_at_ - 1e-12) {
-        hinted = static_cast<long>(checkpoints_.size()) - 1;
-        if (!holds(checkpoints_.back())) {
-          refused_at_ = now;
-          return verdict;
-        }
-      }
-      // The search drops most manoeuvres within their first few checkpoints: found as the simulation gets
-      // there, the rest of it is spared. The checkpoints before the one where the last manoeuvre was dropped
-      // are tested for free space only until this one gets there, where the distances are tested first (most
-      // manoeuvres are dropped where the one before was); then theirs. Where the manoeuvre leaves known-free
-      // space first, the walk below takes it from the start (its min_distance up to there is the verdict's).
-      if (searching) {
-        const std::size_t last = checkpoints_.size() - 1;
-        if (!free.disk_free(checkpoints_[last].p, keep)) break;
-        if (now >= dropped_at_ - 1e-12 || stopped) {
-          if (dropped_at(checkpoints_[last])) return drop(checkpoints_[last]);
-          for (; distances_tested < last; ++distances_tested)
-            if (dropped_at(checkpoints_[distances_tested])) return drop(checkpoints_[distances_tested]);
-          distances_tested = last + 1;
-        }
-      }
-      if (stopped) break;
-    }
-  }
+  bool ended = false;  // the walk found the verdict on the way
+  walk(settings_, velocity_, previous_, command, hold_end, !moving_.empty(),
+       [&](const Eigen::Vector2d& p, double now, bool stopped, bool passive) {
+         checkpoints_.push_back({p, now, stopped, passive});
+         // Only the verdict counts: the checkpoint where the last refused manoeuvre failed, looked at as soon as
+         // this one gets there. Candidates are often alike, and fail alike: the rest of the way is then spared.
+         if (verdict_only && hinted < 0 && now >= failed_at_ - 1e-12) {
+           hinted = static_cast<long>(checkpoints_.size()) - 1;
+           if (!holds(checkpoints_.back())) {
+             refused_at_ = now;
+             ended = true;
+             return false;
+           }
+         }
+         // The search drops most manoeuvres within their first few checkpoints: found as the simulation gets
+         // there, the rest of it is spared. The checkpoints before the one where the last manoeuvre was dropped
+         // are tested for free space only until this one gets there, where the distances are tested first (most
+         // manoeuvres are dropped where the one before was); then theirs. Where the manoeuvre leaves known-free
+         // space first, the walk below takes it from the start (its min_distance up to there is the verdict's).
+         if (searching) {
+           const std::size_t last = checkpoints_.size() - 1;
+           if (!free.disk_free(checkpoints_[last].p, keep)) return false;
+           if (now >= dropped_at_ - 1e-12 || stopped) {
+             if (dropped_at(checkpoints_[last])) {
+               verdict = drop(checkpoints_[last]);
+               ended = true;
+               return false;
+             }
+             for (; distances_tested < last; ++distances_tested)
+               if (dropped_at(checkpoints_[distances_tested])) {
+                 verdict = drop(checkpoints_[distances_tested]);
+                 ended = true;
+                 return false;
+               }
+             distances_tested = last + 1;
+           }
+         }
+         return true;
+       });
+  if (ended) return verdict;
 
   // The objects that could come near: all of them when distances are measured; else those that can come
   // within the clearance of the circle holding every checkpoint, at their predicted positions through the
