@@ -882,6 +882,27 @@ TEST(ShieldEpisode, StopsShortOfAGapTheRobotCannotPass) {
   EXPECT_LT(safe.trace.robot.back().x(), 3.75);
 }
 
+TEST(ShieldEpisode, SlidesAlongAWallThatThePlannerGrazes) {
+  // A planner that keeps asking to go diagonally into a long wall, slowly: the evasive manoeuvres (1 and 2 m/s)
+  // are all farther from its wish than the stop, so without the slide the robot stood at the wall from then on.
+  core::Scenario s;
+  s.name = "grazing";
+  s.duration = 10.0;
+  s.obstacles = {box(Vec2(5.0, 1.0), Vec2(20.0, 0.4))};  // its face at y = 0.8
+  s.target = {{0.0, Vec2(0.0, -1.5)}};
+  s.sensor.beams = 360;
+  const Vec2 wish(0.4, 0.3);
+  auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(wish), episode_shield());
+  const auto run = sim::run_episode(s, *shielded, lagged_episode());
+  EXPECT_EQ(run.metrics.collisions, 0);
+  EXPECT_GT(run.metrics.min_clearance_m, 0.0);
+  EXPECT_GT(run.metrics.shield.alternative, 0);
+  EXPECT_EQ(run.metrics.shield.stop, 0);
+  // Along the wall at the wish's own pace there: 0.4 m/s for 10 s is 4 m; the approach takes a little.
+  EXPECT_GT(run.trace.robot.back().x(), 3.5);
+  EXPECT_LT(run.trace.robot.back().y(), 0.8 - 0.25);
+}
+
 TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   // A 0.6 m box drives at the robot, which a careless planner keeps still, at 1 m/s.
   core::Scenario s;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/safety.hpp"
@@ -166,6 +167,14 @@ class Shielded final : public Planner {
       // The planner's command, slowed: still its way, with less to brake from.
       for (const double share : {0.75, 0.5, 0.25})
         if (certifier_.certify(share * planned)) return send(out, share * planned, SafetyAction::alternative);
+      // The planner's command slid along the nearest return: without its part towards it. A plan that grazes
+      // an obstacle within braking reach is refused, and so are its slowed copies; the stop that follows is
+      // nearer the wish than any evasive manoeuvre, and the planner asks the same again next cycle: the robot
+      // stood still for 10 s beside a box while the target went 12 m away (cvae, clutter-dynamic-2ms,
+      // dynamic-a-6, docs/safety.md "Sliding along an obstacle").
+      if (const auto slid = slide(planned))
+        for (const double share : {1.0, 0.5})
+          if (certifier_.certify(share * *slid)) return send(out, share * *slid, SafetyAction::alternative);
     }
     // 2. A certified stop or evasive manoeuvre, whichever is nearer the planner's wish (the stop when equally
     //    near); else the evasive manoeuvre under way, if still certified; else the best effort: the manoeuvre
@@ -240,6 +249,23 @@ class Shielded final : public Planner {
     Eigen::Index rows = nearest.rows();
     while (rows > 1 && nearest.row(rows - 1) == nearest.row(0)) --rows;
     return rows;
+  }
+
+  /// `command` without its part towards the scan's nearest return, when it has such a part and that return is
+  /// within the clearance plus the command's braking reach (held through the latency, a replanning interval and
+  /// the response lag, then braking at accel_max); what is left must be a move (over 5 cm/s).
+  std::optional<Eigen::Vector2d> slide(const Eigen::Vector2d& command) const {
+    const Settings& s = certifier_.settings();
+    const FreeSpace& free = certifier_.free_space();
+    const double speed = command.norm();
+    const double reach = speed * (s.latency + certifier_.hold() + s.response_time) + speed * speed / (2.0 * s.accel_max);
+    if (!(free.nearest() > 0.0) || !(free.nearest() < s.clearance() + reach)) return std::nullopt;
+    const Eigen::Vector2d towards(std::cos(free.nearest_bearing()), std::sin(free.nearest_bearing()));
+    const double into = command.dot(towards);
+    if (!(into > 0.0)) return std::nullopt;
+    const Eigen::Vector2d slid = command - into * towards;
+    if (!(slid.norm() > 0.05)) return std::nullopt;
+    return slid;
   }
 
   struct Candidate {
