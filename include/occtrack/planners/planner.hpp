@@ -53,7 +53,8 @@ struct PlannerInput {
 enum class SafetyAction {
   off,          ///< no safety layer (the default; --shield turns it on), or a planner used directly
   plan,         ///< the planner's own command was certified
-  alternative,  ///< a lower-ranked candidate of the planner was the best certified one
+  alternative,  ///< not its own command, but a lower-ranked candidate, or the command slowed or slid along the
+                ///< nearest obstacle, was certified (docs/safety.md, "Fallback")
   stop,         ///< no candidate was certified; braking to a stop was
   evasive,      ///< neither; a certified evasive command (away from approaching obstacles) was sent
   best_effort,  ///< nothing certified: the manoeuvre in known-free space (with the margin, else at the bare
