@@ -903,6 +903,65 @@ TEST(ShieldEpisode, SlidesAlongAWallThatThePlannerGrazes) {
   EXPECT_LT(run.trace.robot.back().y(), 0.8 - 0.25);
 }
 
+/// A planner whose command and lower-ranked candidates are given (a sampling planner's, cheapest first).
+class Ranked final : public planners::Planner {
+ public:
+  explicit Ranked(std::vector<Vec2> ranked) : ranked_(std::move(ranked)) {}
+  std::string name() const override { return "ranked"; }
+  void reset() override {}
+  using Planner::plan;
+  void plan(const planners::PlannerInput&, planners::PlannerOutput& out) override {
+    out.ok = true;
+    out.command_velocity = ranked_.front();
+    out.ranked_commands = ranked_;
+    out.compute_ms = 0.0;
+  }
+  const planners::PlanRecord& last_record() const override { return record_; }
+
+ private:
+  std::vector<Vec2> ranked_;
+  planners::PlanRecord record_;
+};
+
+TEST(ShieldChoice, ACandidateAlikeARefusedOneIsRefusedWithIt) {
+  // A wall 0.7 m ahead of a robot heading for it at 1 m/s. The fastest certified command towards it, found by
+  // bisection with a certifier of the layer's settings; the planner's command just over it is refused.
+  const core::Scan scan = make_scan([](double a) { return wall_range(a, 0.7); });
+  const planners::safety::Settings settings = episode_shield();
+  const Vec2 velocity(1.0, 0.0);
+  Certifier certifier(settings);
+  certifier.begin(scan, velocity, velocity, {});
+  double lo = 0.0, hi = settings.speed_max;
+  ASSERT_TRUE(certifier.certify(Vec2(lo, 0.0)));
+  ASSERT_FALSE(certifier.certify(Vec2(hi, 0.0)));
+  while (hi - lo > 1e-6) {
+    const double mid = 0.5 * (lo + hi);
+    (certifier.certify(Vec2(mid, 0.0)) ? lo : hi) = mid;
+  }
+  const Vec2 planned(hi + 0.002, 0.0), alike(lo - 0.002, 0.0), apart(lo - 0.05, 0.0);
+  ASSERT_FALSE(certifier.certify(planned));
+  ASSERT_TRUE(certifier.certify(alike));  // certified, but within 1 cm/s of the refused command
+  ASSERT_TRUE(certifier.certify(apart));
+
+  planners::PlannerInput input;
+  input.robot_velocity = velocity;
+  input.target_position = Vec2(5.0, 0.0);
+  input.scan = &scan;
+  const auto choice = [&](std::vector<Vec2> ranked) {
+    auto shielded = planners::safety::make_shielded(std::make_unique<Ranked>(std::move(ranked)), settings);
+    return shielded->plan(input);
+  };
+  // The candidate alike the refused command is passed over: the command slowed is sent instead.
+  const planners::PlannerOutput passed = choice({planned, alike});
+  EXPECT_EQ(passed.safety, planners::SafetyAction::alternative);
+  EXPECT_EQ(passed.command_velocity, Vec2(0.75 * planned));
+  // One farther apart is certified and sent, as is the alike one when no refused command is near it.
+  EXPECT_EQ(choice({planned, apart}).command_velocity, apart);
+  const planners::PlannerOutput alone = choice({alike, planned});
+  EXPECT_EQ(alone.safety, planners::SafetyAction::plan);
+  EXPECT_EQ(alone.command_velocity, alike);
+}
+
 TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   // A 0.6 m box drives at the robot, which a careless planner keeps still, at 1 m/s.
   core::Scenario s;

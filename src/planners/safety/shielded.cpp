@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "../cycle.hpp"
 #include "occtrack/perception/perception.hpp"
 #include "occtrack/planners/safety.hpp"
 
@@ -20,6 +21,7 @@ class Shielded final : public Planner {
     moving_.reserve(static_cast<std::size_t>(2 * perception_.settings().nearest_count));
     const int directions = certifier_.settings().evasive_directions;
     candidates_.reserve(static_cast<std::size_t>(6 * directions));
+    refused_.reserve(detail::kRankedCommands + 1);  // the planned command and its candidates: no allocation per cycle
     for (int i = 0; i < directions; ++i) {
       const double angle = 2.0 * M_PI * i / directions;
       directions_.emplace_back(std::cos(angle), std::sin(angle));
@@ -162,8 +164,19 @@ class Shielded final : public Planner {
     // 1. The planner's command, then its other candidates in rank order.
     if (out.ok && planned.allFinite()) {
       if (certifier_.certify(planned)) return send(out, planned, SafetyAction::plan);
-      for (const Vec2& c : out.ranked_commands)
-        if (c != planned && certifier_.certify(c)) return send(out, c, SafetyAction::alternative);
+      // A candidate within kAlike of one refused this cycle is refused with it, uncertified: their ways part by
+      // about the difference times the hold and the response lag (3 mm at 0.05 s and 0.25 s). A sampling planner's
+      // candidates crowd about a few modes (the cvae's 32 make about 17 within 1 cm/s of each other where
+      // obstacles close in, clutter-dynamic-2ms dynamic-a-1), and each refusal simulates the manoeuvre to
+      // where the one before failed: the refused candidates were the largest share of an evasive cycle
+      // (docs/benchmarks.md, "Alike candidates").
+      refused_.clear();
+      refused_.push_back(planned);
+      for (const Vec2& c : out.ranked_commands) {
+        if (alike_refused(c)) continue;
+        if (certifier_.certify(c)) return send(out, c, SafetyAction::alternative);
+        refused_.push_back(c);
+      }
       // The planner's command, slowed: still its way, with less to brake from.
       for (const double share : {0.75, 0.5, 0.25})
         if (certifier_.certify(share * planned)) return send(out, share * planned, SafetyAction::alternative);
@@ -243,6 +256,13 @@ class Shielded final : public Planner {
     remember(out);  // 4. full brake (command zero), uncertified
   }
 
+  /// True when `command` lies within kAlike of a command refused this cycle (refused_).
+  bool alike_refused(const Eigen::Vector2d& command) const {
+    for (const Eigen::Vector2d& r : refused_)
+      if ((r - command).squaredNorm() < kAlike * kAlike) return true;
+    return false;
+  }
+
   /// The rows of `nearest` before perception's padding: trailing rows that copy row 0.
   template <typename Rows>
   static Eigen::Index distinct_rows(const Rows& nearest) {
@@ -273,6 +293,8 @@ class Shielded final : public Planner {
     double hold, gap;  // s held before braking; distance from the planner's wish
   };
   std::vector<Candidate> candidates_;  // the evasive manoeuvres, storage kept from cycle to cycle
+  std::vector<Eigen::Vector2d> refused_;  // the planner's candidates refused this cycle
+  static constexpr double kAlike = 0.01;  // m/s: candidates this near count as one (choose())
   std::vector<Eigen::Vector2d> directions_;  // theirs: evasive_directions unit vectors, evenly spread
 
   /// The best manoeuvre offered so far: farthest from moving points, then closest to the planner's wish.
