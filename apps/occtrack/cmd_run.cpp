@@ -49,8 +49,8 @@ int run(const RunOptions& o) {
     std::printf("  latency          %.1f ms (compute scale %g); sight lost %d times, the longest for %.2f s\n",
                 m.latency_ms, m.compute_scale, m.occlusion_stretches, m.longest_occlusion_s);
   if (m.shield.total() > 0)
-    std::printf("  safety layer     cycles: %d plan, %d alternative (lower-ranked, slowed or slid), %d stop, %d evasive, "
-                "%d best effort, %d full brake\n",
+    std::printf("  safety layer     cycles: %d plan, %d alternative (lower-ranked, slowed or slid), %d stop, "
+                "%d evasive, %d best effort, %d full brake\n",
                 m.shield.plan, m.shield.alternative, m.shield.stop, m.shield.evasive, m.shield.best_effort,
                 m.shield.brake);
   std::printf("  tracking         mean distance %.2f m, %.0f%% of the time in [%.1f, %.1f] m; target out of range "
