@@ -62,6 +62,32 @@ TEST(ResponseTime, TheCommandIsThePlansVelocityTauAhead) {
   EXPECT_GT(plan_once(ahead, scenario).command_velocity.norm(), plan_once(now, scenario).command_velocity.norm());
 }
 
+// A command applies `latency` after its scan: make_planner's planners lead their plan by the lag and the
+// latency together (command_lead), and the safety layer keeps the lag alone as the robot's.
+TEST(ResponseTime, PlannersLeadByTheLatencyToo) {
+  const core::Scenario scenario = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
+  planners::PlannerOptions late, lag_only, lumped;
+  late.response_time = 0.25;
+  late.latency = 0.15;
+  lag_only.response_time = 0.25;
+  lumped.response_time = 0.4;
+  EXPECT_DOUBLE_EQ(planners::command_lead(late), 0.4);
+  EXPECT_DOUBLE_EQ(planners::command_lead(lag_only), 0.25);
+  for (const std::string name : {"follower", "projcem", "cvae"}) {
+    SCOPED_TRACE(name);
+    const auto command = [&](const planners::PlannerOptions& options) {
+      const auto planner = planners::make_planner(name, options);
+      const planners::PlannerOutput out = plan_once(*planner, scenario);
+      EXPECT_TRUE(out.ok) << out.message;
+      return Eigen::Vector2d(out.command_velocity);
+    };
+    const Eigen::Vector2d with_latency = command(late);
+    EXPECT_EQ(with_latency, command(lumped));
+    // The robot starts at rest and accelerates: 0.15 s further along asks for more.
+    EXPECT_GT(with_latency.norm(), command(lag_only).norm() + 1e-3);
+  }
+}
+
 TEST(ResponseTime, ZeroIsTheV1CommandExactly) {
   const core::Scenario scenario = io::read_scenario(OCCTRACK_TEST_DATA_DIR "/scenarios/orbit.yaml");
   planners::Follower v1, zero(planners::FollowerSettings{});

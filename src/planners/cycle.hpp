@@ -103,7 +103,8 @@ void rank_commands(const std::vector<double>& costs, std::vector<int>& order, Co
 
 class Context {
  public:
-  /// `response_time`: the robot's velocity time constant (Protocol v2's tau), by which commands lead the plan.
+  /// `response_time`: how far ahead along the plan commands are taken (the robot's velocity time constant,
+  /// Protocol v2's tau, plus the command latency: command_lead).
   Context(const projection::Settings& projection, const perception::Settings& perception,
           const RankingSettings& ranking, double response_time = 0.0);
 

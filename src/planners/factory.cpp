@@ -31,6 +31,8 @@ double tracking_weight_for(const std::string& name, const PlannerOptions& option
   return RankingSettings{}.tracking_weight;
 }
 
+double command_lead(const PlannerOptions& options) { return options.response_time + options.latency; }
+
 namespace {
 
 std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {
@@ -40,7 +42,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
                             : ProjCemSettings{};
     if (options.samples > 0) s.samples = options.samples;
     s.seed = options.seed;
-    s.response_time = options.response_time;
+    s.response_time = command_lead(options);
     s.projection.threads = std::max(1, options.threads);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
@@ -48,7 +50,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
   }
   if (name == "follower") {
     FollowerSettings s;
-    s.response_time = options.response_time;
+    s.response_time = command_lead(options);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
     return std::make_unique<Follower>(s);
@@ -56,7 +58,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
   if (name == "autochaser") {
     AutoChaserSettings s;
     s.waypoints = options.waypoints;  // 0: constant-velocity prediction
-    s.response_time = options.response_time;
+    s.response_time = command_lead(options);
     return std::make_unique<AutoChaser>(s);
   }
   if (const auto variant = learned_variant(name)) {
@@ -68,7 +70,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.rank_stop = options.rank_stop;
     if (options.iterations > 0) s.projection.iterations = options.iterations;
     s.seed = options.seed;
-    s.response_time = options.response_time;
+    s.response_time = command_lead(options);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
     return std::make_unique<LearnedPolicy>(s);

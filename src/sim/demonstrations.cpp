@@ -437,7 +437,7 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
         }
         planners::ProjCemSettings expert_settings = settings.expert;
         expert_settings.seed = seed;
-        if (expert_drives) expert_settings.response_time = settings.driver_options.response_time;
+        if (expert_drives) expert_settings.response_time = planners::command_lead(settings.driver_options);
         DemonstrationRecorder recorder(std::make_unique<planners::ProjCem>(expert_settings), make_driver(seed),
                                        settings.label_every);
         EpisodeSettings episode = settings.episode;

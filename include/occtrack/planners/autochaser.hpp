@@ -51,8 +51,9 @@ struct AutoChaserSettings {
   double accel_max = 2.0;        ///< m/s^2: the command changes by at most accel_max * command_window
   double command_window = 0.1;   ///< s, the command is the path's mean velocity over its first window
   double replan_period = 0.0;    ///< s, 0: replan every cycle (prediction mode); > 0: hold the path this long
-  /// s, the robot's velocity time constant: the command is the path's mean velocity over the window starting
-  /// this far ahead, and may differ from the robot's velocity by accel_max * (window + response_time)
+  /// s, the robot's velocity time constant plus the command latency (command_lead): the command is the path's
+  /// mean velocity over the window starting this far ahead, and may differ from the robot's velocity by
+  /// accel_max * (window + response_time)
   double response_time = 0.0;
   /// m/s: a new path starts with the last path's velocity and acceleration while the robot's velocity is
   /// within this of it (a robot that lags its command does not drag the plan down); 0: always the robot's.

@@ -19,7 +19,8 @@ struct FollowerSettings {
     return s;
   }();
   RankingSettings ranking;  ///< its tracking band sets the goal; the whole ranking scores the plan (PlanRecord)
-  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  /// s by which commands lead the plan (0: v1): the robot's velocity time constant, Protocol v2's tau, plus
+  /// the command latency when make_planner builds it (command_lead).
   double response_time = 0.0;
 
   /// True when the projection (batch 1 is what the follower projects) and ranking settings are valid;

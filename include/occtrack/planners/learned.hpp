@@ -40,7 +40,8 @@ struct LearnedPolicySettings {
   projection::Settings projection = projection::Settings::with_iterations(50);
   perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
-  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  /// s by which commands lead the plan (0: v1): the robot's velocity time constant, Protocol v2's tau, plus
+  /// the command latency when make_planner builds it (command_lead).
   double response_time = 0.0;
 
   /// True when batch >= 1, candidates_kept >= 0, and projection (with its batch set from the rows ranked),

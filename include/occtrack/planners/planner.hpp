@@ -179,7 +179,8 @@ struct PlannerOptions {
   /// rank plans (Proj-CEM, the follower, the learned planners). 0: the planner's default, which is the
   /// ranking's 1 except for the learned planners (learned_tracking_weight).
   double tracking_weight = 0.0;
-  /// s, the robot's velocity time constant: commands lead the plan by it (Protocol v2's tau; 0: v1).
+  /// s, the robot's velocity time constant (Protocol v2's tau; 0: v1). Commands lead the plan by it and by
+  /// the latency (command_lead); the safety layer models the robot's lag with it.
   double response_time = 0.0;
   int waypoints = 0;  ///< AutoChaser: true future target points given as prior (0: constant-velocity prediction)
   /// The safety layer (planners/safety.hpp) around the planner. Off by default until issue 11's measurements
@@ -187,12 +188,18 @@ struct PlannerOptions {
   bool shield = false;
   /// The target predictor in the ranking (RankingSettings::predict_target); off: constant velocity, as before.
   bool predictor = false;
-  double latency = 0.0;          ///< s, command latency the safety layer allows for (Protocol v2)
+  double latency = 0.0;          ///< s from the scan until a command applies (Protocol v2); see command_lead
   double planning_period = 0.05; ///< s between cycles, for the safety layer
   double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer
   double passive_turn = 180.0;   ///< degrees, the safety layer's safety::Settings::moving_turn_max
   double standoff = 0.5;         ///< s, the safety layer's safety::Settings::moving_standoff
 };
+
+/// s by which a planner's command leads its plan: a command takes effect `latency` after the scan it was
+/// planned from, and the robot's velocity follows it with the time constant `response_time`, so the plan's
+/// velocity that far ahead is the one to send. make_planner gives it to every planner as its settings'
+/// response_time; the safety layer keeps the two apart (the robot holds its last command through the latency).
+double command_lead(const PlannerOptions& options);
 
 /// Names the command line accepts, e.g. "projcem", "follower".
 std::vector<std::string> planner_names();

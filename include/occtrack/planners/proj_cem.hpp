@@ -30,7 +30,8 @@ struct ProjCemSettings {
   projection::Settings projection = projection::Settings::with_iterations(30);
   perception::Settings perception = perception::Settings::tracking();
   RankingSettings ranking;
-  /// s: the robot's velocity time constant (Protocol v2's tau); commands lead the plan by it (0: v1).
+  /// s by which commands lead the plan (0: v1): the robot's velocity time constant, Protocol v2's tau, plus
+  /// the command latency when make_planner builds it (command_lead).
   double response_time = 0.0;
 
   /// The offline expert: 120 samples, 8 CEM iterations, 50 projection iterations, on `threads` cores.
