@@ -164,6 +164,9 @@ class PyPlanner {
  public:
   PyPlanner(const std::string& name, const py::kwargs& settings) {
     const app::EpisodeCliOptions options = episode_options(name, settings);
+    // A planner alone has no replayed scans to time itself on: its latency is the caller's to know.
+    if (options.latency_auto())
+      throw py::value_error("--latency auto: a Planner cannot measure its own latency; give it in ms (latency=20)");
     planner_ = planners::make_planner(options.planner, options.planner_settings());
   }
 

@@ -113,15 +113,19 @@ struct EpisodeCliOptions {
   std::string response_time;  ///< the planners' response time (s); empty: the robot's, --tau
 
   /// The planner options with the response time resolved: a planner is configured for its robot, so by
-  /// default it leads its command by the robot's lag (--tau; 0 in v1). With the episode's settings (once
-  /// --latency is resolved), the safety layer also learns the latency, planning period and acceleration bound.
-  /// Throws naming --response-time.
+  /// default it leads its command by the robot's lag (--tau; 0 in v1) and the latency. With the episode's
+  /// settings (once --latency is resolved), the safety layer also learns the latency, planning period and
+  /// acceleration bound; without them, a --latency in ms is taken as is (auto stays 0 until measured).
+  /// Throws naming --response-time or --latency.
   planners::PlannerOptions planner_settings(const sim::EpisodeSettings* episode = nullptr) const {
     planners::PlannerOptions p = planner_options;
-    if (episode)
+    if (episode) {
       p = sim::planner_options_for(*episode, p);
-    else
+    } else {
       p.response_time = tau;  // what the episode will take from --tau
+      if (latency != "none" && !latency_auto())
+        p.latency = episode_cli::value("--latency", latency, episode_cli::check_latency(latency)) / 1000.0;
+    }
     if (!response_time.empty())
       p.response_time = episode_cli::value("--response-time", response_time,
                                            episode_cli::check(response_time, 0.0, INFINITY));

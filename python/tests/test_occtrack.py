@@ -87,6 +87,17 @@ def test_a_bad_argument_raises_naming_it(argument, value, message):
         plan_once(planner, **{argument: value})
 
 
+def test_a_planner_leads_its_command_by_the_latency_too():
+    # The command applies 150 ms after the scan: the plan's velocity 0.25 + 0.15 s ahead is the one sent.
+    late = plan_once(occtrack.Planner("follower", shield=False, tau=0.25, latency=150))["command"]
+    lumped = plan_once(occtrack.Planner("follower", shield=False, tau=0.4))["command"]
+    lag_only = plan_once(occtrack.Planner("follower", shield=False, tau=0.25))["command"]
+    assert np.array_equal(late, lumped)
+    assert np.linalg.norm(late) > np.linalg.norm(lag_only) + 1e-3
+    with pytest.raises(ValueError, match="--latency auto"):
+        occtrack.Planner("follower", latency="auto")
+
+
 def test_an_unknown_planner_is_refused_with_the_known_names():
     with pytest.raises(ValueError, match="nope"):
         occtrack.Planner("nope")
