@@ -27,7 +27,9 @@ bool validate_cycle(const projection::Settings& projection, const perception::Se
   if (!ranking.validate(&why)) return fail("ranking.");
   if (!(std::isfinite(response_time) && response_time >= 0.0 && response_time < projection.horizon)) {
     if (error)
-      *error = "response_time (" + std::to_string(response_time) + ") must lie in [0, projection.horizon)";
+      *error = "response_time (" + std::to_string(response_time) +
+               " s, the command's lead: the robot's lag plus the latency) must lie in [0, projection.horizon = " +
+               std::to_string(projection.horizon) + " s)";
     return false;
   }
   if (perception && perception->nearest_count != projection.obstacles) {
