@@ -123,8 +123,7 @@ struct EpisodeCliOptions {
       p = sim::planner_options_for(*episode, p);
     } else {
       p.response_time = tau;  // what the episode will take from --tau
-      if (latency != "none" && !latency_auto())
-        p.latency = episode_cli::value("--latency", latency, episode_cli::check_latency(latency)) / 1000.0;
+      if (const auto ms = fixed_latency_ms()) p.latency = *ms / 1000.0;
     }
     if (!response_time.empty())
       p.response_time = episode_cli::value("--response-time", response_time,
@@ -133,6 +132,12 @@ struct EpisodeCliOptions {
   }
 
   bool latency_auto() const { return latency == "auto"; }
+  /// --latency in ms when it is a number; nothing for none, and for auto until resolve_episode_settings()
+  /// measures it. Throws naming --latency for a bad value.
+  std::optional<double> fixed_latency_ms() const {
+    if (latency == "none" || latency_auto()) return std::nullopt;
+    return episode_cli::value("--latency", latency, episode_cli::check_latency(latency));
+  }
 
   /// The episode's settings these options choose (the rest at their defaults). Throws std::invalid_argument
   /// naming the option for a bad value, and for `--latency auto`, which only resolve_episode_settings() can
@@ -145,7 +150,7 @@ struct EpisodeCliOptions {
     if (latency_auto())
       throw std::invalid_argument("--latency auto: must be resolved by measuring the planner first "
                                   "(resolve_episode_settings)");
-    if (latency != "none") s.latency_ms = e::value("--latency", latency, e::check_latency(latency));
+    s.latency_ms = fixed_latency_ms();
     if (!(std::isfinite(compute_scale) && compute_scale > 0.0))
       throw std::invalid_argument("--compute-scale: must be a number > 0, got " + e::show(compute_scale));
     s.compute_scale = compute_scale;
