@@ -41,7 +41,8 @@ const std::vector<PaperPlanner>& paper_planners() {
       {"follower", "follower", "follower (naive, no occlusion awareness), leading its command by the robot's lag",
        [](EpisodeCliOptions&) {}},
       {"follower-nolead", "follower",
-       "the same follower unaware of the robot's lag (response time 0: the v1 command, the plan's first 0.1 s)",
+       "the same follower unaware of the robot's lag (response time 0: the v1 command, the plan's first 0.1 s after "
+       "the latency)",
        [](EpisodeCliOptions& o) { o.response_time = "0"; }},
       {"autochaser", "autochaser", "AutoChaser, constant-velocity target prediction",
        [](EpisodeCliOptions& o) { o.planner_options.waypoints = 0; }},
@@ -131,7 +132,7 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
       "robot response: first-order lag tau " + episode_cli::show(episode.tau) +
           " s; every planner but follower-nolead knows it and leads its command by it (response time " +
-          episode_cli::show(planner.response_time) + " s, docs/protocol_v2.md)",
+          episode_cli::show(planner.response_time) + " s) and by its latency (docs/protocol_v2.md)",
       "LiDAR: " + (episode.beams ? std::to_string(*episode.beams) : std::string("the scenario's")) +
           " beams, Gaussian range noise sigma " +
           (episode.lidar_noise ? episode_cli::show(*episode.lidar_noise) + " m" : std::string("the scenario's")) +
