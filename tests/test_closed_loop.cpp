@@ -132,6 +132,12 @@ TEST(ClosedLoop, PlannerOptionsFollowTheEpisode) {
   const planners::PlannerOptions o = sim::planner_options_for(e, mine);
   EXPECT_EQ(o.response_time, 0.3);  // leads its command by the robot's lag
   EXPECT_DOUBLE_EQ(o.latency, 0.04);
+  e.latency_ms = 15.0;  // a command applies at the first 10 ms physics step at or after 15 ms: 20 ms on
+  EXPECT_DOUBLE_EQ(sim::planner_options_for(e).latency, 0.02);
+  e.latency_ms = 0.5;
+  EXPECT_DOUBLE_EQ(sim::planner_options_for(e).latency, 0.01);
+  e.latency_ms = 0.0;
+  EXPECT_EQ(sim::planner_options_for(e).latency, 0.0);
   EXPECT_EQ(o.planning_period, 0.1);
   EXPECT_EQ(o.accel_max, 3.0);
   EXPECT_EQ(o.seed, 7u);  // the rest is the caller's

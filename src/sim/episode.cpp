@@ -54,9 +54,21 @@ bool EpisodeSettings::validate(std::string* error) const {
   return false;
 }
 
+namespace {
+
+/// Whole physics steps from t until a command computed at t applies: the latency rounded up (Protocol v2).
+int latency_steps(const EpisodeSettings& settings) {
+  if (!settings.latency_ms) return 0;
+  return static_cast<int>(std::ceil(*settings.latency_ms / 1000.0 / settings.physics_step - 1e-9));
+}
+
+}  // namespace
+
 planners::PlannerOptions planner_options_for(const EpisodeSettings& episode, planners::PlannerOptions options) {
   options.response_time = episode.tau;
-  options.latency = episode.latency_ms.value_or(0.0) / 1000.0;
+  // The latency the robot lives with: a command applies at the first physics step at or after latency_ms, so
+  // 15 ms acts as 20 at 10 ms steps. The lead and the safety layer's certificate are for that delay.
+  options.latency = latency_steps(episode) * episode.physics_step;
   options.planning_period = episode.planning_period;
   options.accel_max = episode.robot_accel_max;
   return options;
@@ -68,12 +80,6 @@ namespace {
 // defaults no extra draw happens and v1 scans stay bit for bit what they were.
 constexpr std::uint64_t kDropoutStream = 0x9e3779b97f4a7c15ULL;
 constexpr std::uint64_t kTargetNoiseStream = 0xd1b54a32d192ed03ULL;
-
-/// Whole physics steps from t until a command computed at t applies: the latency rounded up (Protocol v2).
-int latency_steps(const EpisodeSettings& settings) {
-  if (!settings.latency_ms) return 0;
-  return static_cast<int>(std::ceil(*settings.latency_ms / 1000.0 / settings.physics_step - 1e-9));
-}
 
 /// The scenario with the settings' sensor overrides (Protocol v2: beams, range noise, dropout).
 core::Scenario sensed_scenario(const core::Scenario& scenario, const EpisodeSettings& settings) {
