@@ -64,8 +64,7 @@ struct EpisodeResult {
 
 /// `options` for a planner driving a robot under `episode`: the response time is the robot's lag (tau), and the
 /// safety layer learns the command latency (as it acts: rounded up to whole physics steps), the planning period
-/// and the acceleration bound. The one home of
-/// this mapping; the command line and the tests call it.
+/// and the acceleration bound. The one home of this mapping; the command line and the tests call it.
 planners::PlannerOptions planner_options_for(const EpisodeSettings& episode, planners::PlannerOptions options = {});
 
 /// Runs the scenario to its duration with the planner (reset first). `progress`, when given, is called with
