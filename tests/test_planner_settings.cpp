@@ -62,6 +62,9 @@ std::vector<Sentinel<planners::RankingSettings>> ranking_sentinels(const std::st
       {prefix + "near_weight", [](R& r) { r.near_weight = kNaN; }},
       {prefix + "near_horizon", [](R& r) { r.near_horizon = kNaN; }},
       {prefix + "near_clearance", [](R& r) { r.near_clearance = -0.1; }},
+      {prefix + "moving_reach", [](R& r) { r.moving_reach = kNaN; }},
+      {prefix + "moving_reach_speed_min", [](R& r) { r.moving_reach_speed_min = -0.1; }},
+      {prefix + "moving_reach_speed_max", [](R& r) { r.moving_reach_speed_max = kNaN; }},
       {prefix + "band.min", [](R& r) { r.band.min = 0.0; }},
       {prefix + "band.reference", [](R& r) { r.band.reference = kNaN; }},
       // Below the reference: "<prefix>band.reference (2) must not exceed band.max (1.5)".
@@ -82,6 +85,29 @@ TEST(PlannerSettings, RankingRefusesAStrideOfZeroInsteadOfLoopingForever) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("occlusion_stride (0) must be at least 1"), std::string::npos) << e.what();
   }
+}
+
+// The near term's room from moving points (RankingSettings::moving_reach), on a plan that stands at the origin:
+// the nearest approach of each point is where it starts, so the term is that reach less that distance.
+TEST(PlannerSettings, RankingKeepsMoreRoomFromAMovingPointOnly) {
+  const projection::Settings projection;
+  const Eigen::RowVectorXd still = Eigen::RowVectorXd::Zero(2 * projection.coefficients());
+  const Eigen::Vector4d target(2.0, 0.0, 0.0, 0.0);
+  auto near = [&](double reach, const Eigen::RowVector4d& point) {
+    planners::RankingSettings r;
+    r.moving_reach = reach;
+    const planners::Ranking ranking(r, projection);
+    planners::PointRows points(2, 4);
+    points.row(0) << 1.0, 0.0, 0.0, 0.0;  // a still point 1 m away: beyond near_clearance (0.4 m)
+    points.row(1) = point;
+    return ranking.evaluate(still, target, points, points).near;
+  };
+  const Eigen::RowVector4d crossing(0.6, 0.0, 0.0, 0.5), slow(0.6, 0.0, 0.0, 0.2), fast(0.8, 0.0, 0.0, 3.0);
+  EXPECT_EQ(near(0.0, crossing), 0.0);                 // 0.6 m away: outside the near clearance
+  EXPECT_NEAR(near(0.5, crossing), 0.4 + 0.5 * 0.5 - 0.6, 1e-12);
+  EXPECT_EQ(near(0.5, slow), 0.0);                     // under moving_reach_speed_min: a still object's jitter
+  EXPECT_NEAR(near(0.5, fast), 0.4 + 1.0 * 0.5 - 0.8, 1e-12);  // speed capped at moving_reach_speed_max
+  EXPECT_NEAR(near(1.0, crossing), 0.4 + 0.5 * 1.0 - 0.6, 1e-12);
 }
 
 TEST(PlannerSettings, ProjCemNamesEveryBrokenField) {

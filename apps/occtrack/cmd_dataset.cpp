@@ -89,6 +89,8 @@ std::string canonical_command(const GenerateOptions& o) {
   if (!o.model.empty()) text += " --model " + o.model;
   if (o.driver != "expert")
     text += " --tracking-weight " + number_text(planners::tracking_weight_for(o.driver, o.episode.planner_options));
+  if (o.driver != "expert" && o.episode.planner_options.moving_reach > 0.0)
+    text += " --moving-reach " + number_text(o.episode.planner_options.moving_reach);
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
   const EpisodeCliOptions& e = o.episode;
@@ -349,6 +351,7 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
       ->capture_default_str();
   gen->add_option("--model", o->model, "Model file of a learned --driver");
   add_tracking_weight_option(gen, o->episode.planner_options.tracking_weight);  // the driver's (dagger.sh: 1)
+  add_moving_reach_option(gen, o->episode.planner_options.moving_reach);  // the driver's
   gen->add_option("--jobs", o->jobs,
                   "Episodes run at the same time (default: every hardware thread; under MPI, per rank, the "
                   "machine's hardware threads shared among its ranks, at most the CPUs the rank is bound to)");

@@ -227,6 +227,17 @@ inline void add_tracking_weight_option(CLI::App* cmd, double& weight) {
       ->capture_default_str();
 }
 
+/// --moving-reach S (planners::PlannerOptions::moving_reach), for `run`, `bench suite` and the driver of
+/// `dataset generate`.
+inline void add_moving_reach_option(CLI::App* cmd, double& reach) {
+  namespace e = episode_cli;
+  cmd->add_option("--moving-reach", reach,
+                  "Ranking: seconds of a moving obstacle's speed by which plans keep farther from it than "
+                  "near_clearance (0: off; docs/learning.md, \"Room for the layer\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 10.0); }, "S in [0, 10]"))
+      ->capture_default_str();
+}
+
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   namespace e = episode_cli;
   std::string names;
@@ -252,6 +263,7 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   add_tracking_weight_option(cmd, o.planner_options.tracking_weight);
+  add_moving_reach_option(cmd, o.planner_options.moving_reach);
   cmd->add_option("--waypoints", o.planner_options.waypoints,
                   "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))

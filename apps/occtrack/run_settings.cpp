@@ -36,6 +36,7 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"batch", p.batch},
                   {"iterations", p.iterations},
                   {"tracking_weight", planners::tracking_weight_for(planner, p)},
+                  {"moving_reach_s", p.moving_reach},
                   {"keep_last_plan", p.keep_last_plan},
                   {"rank_stop", p.rank_stop},
                   {"samples", p.samples},
@@ -73,7 +74,9 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
   std::ostringstream s;
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
     << ", predictor " << (p.predictor ? "on" : "off")
-    << ", tracking weight " << planners::tracking_weight_for(planner, p) << ", latency ";
+    << ", tracking weight " << planners::tracking_weight_for(planner, p);
+  if (p.moving_reach > 0.0) s << ", moving reach " << p.moving_reach << " s";
+  s << ", latency ";
   if (e.latency_ms)
     s << *e.latency_ms << " ms";
   else

@@ -46,6 +46,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.projection.threads = std::max(1, options.threads);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
+    s.ranking.moving_reach = options.moving_reach;
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") {
@@ -53,6 +54,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.response_time = command_lead(options);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
+    s.ranking.moving_reach = options.moving_reach;
     return std::make_unique<Follower>(s);
   }
   if (name == "autochaser") {
@@ -73,6 +75,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.response_time = command_lead(options);
     s.ranking.predict_target = options.predictor;
     s.ranking.tracking_weight = tracking_weight_for(name, options);
+    s.ranking.moving_reach = options.moving_reach;
     return std::make_unique<LearnedPolicy>(s);
   }
   std::string known;

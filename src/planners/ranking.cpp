@@ -24,6 +24,9 @@ bool RankingSettings::validate(std::string* error) const {
   c.non_negative(near_weight, "near_weight");
   c.non_negative(near_horizon, "near_horizon");
   c.non_negative(near_clearance, "near_clearance");
+  c.non_negative(moving_reach, "moving_reach");
+  c.non_negative(moving_reach_speed_min, "moving_reach_speed_min");
+  c.non_negative(moving_reach_speed_max, "moving_reach_speed_max");
   c.positive(band.min, "band.min");
   c.finite(band.reference, "band.reference");
   c.finite(band.max, "band.max");
@@ -46,6 +49,8 @@ Ranking::Ranking(const RankingSettings& settings, const projection::Settings& pr
   for (Eigen::VectorXd* v : {&cx_, &cy_}) v->resize(n);
   for (Eigen::VectorXd* v : {&px_, &py_, &vx_, &vy_, &ax_, &ay_}) v->resize(m);
   collision_columns_.resize(std::max(projection.obstacles, 1), 4);
+  reach_.resize(collision_columns_.rows());
+  reaching_.resize(collision_columns_.rows());
   occluder_candidates_.reserve(512);
   occlusion_weights_.resize(projection.steps);
   for (int k = 0; k < projection.steps; ++k) {
@@ -119,10 +124,24 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
   double tracking = 0, smoothness = 0, violation = 0, tracking_weights = 0;
   const double a = projection_.obstacle_radius;
   const Eigen::Index N = collision_points.rows();
-  if (collision_columns_.rows() < N) collision_columns_.resize(N, 4);  // more points than the optimizer's N
+  if (collision_columns_.rows() < N) {  // more points than the optimizer's N
+    collision_columns_.resize(N, 4);
+    reach_.resize(N);
+    reaching_.resize(N);
+  }
   collision_columns_.topRows(N) = collision_points;
   const auto px0 = collision_columns_.col(0).head(N).array(), py0 = collision_columns_.col(1).head(N).array();
   const auto pvx = collision_columns_.col(2).head(N).array(), pvy = collision_columns_.col(3).head(N).array();
+  // The moving points whose near clearance grows (moving_reach), and that clearance.
+  int reaching = 0;
+  if (settings_.moving_reach > 0.0)
+    for (Eigen::Index j = 0; j < N; ++j) {
+      const double speed = std::hypot(pvx(j), pvy(j));
+      if (!(speed > settings_.moving_reach_speed_min)) continue;
+      reaching_(reaching) = static_cast<int>(j);
+      reach_(reaching++) =
+          settings_.near_clearance + std::min(speed, settings_.moving_reach_speed_max) * settings_.moving_reach;
+    }
   for (int k = 0; k < m; ++k) {
     const double t = basis_.times(k);
     const double distance = (positions.row(k) - targets.row(k)).norm();
@@ -137,8 +156,14 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
                     .minCoeff<Eigen::PropagateNumbers>()
               : INFINITY;
     const double penetration = N > 0 ? a - std::sqrt(nearest2) : 0.0;
-    if (N > 0 && t <= settings_.near_horizon)
+    if (N > 0 && t <= settings_.near_horizon) {
       terms.near = std::max(terms.near, settings_.near_clearance - std::sqrt(nearest2));
+      for (int i = 0; i < reaching; ++i) {
+        const int j = reaching_(i);
+        const double d = std::hypot(positions(k, 0) - (px0(j) + pvx(j) * t), positions(k, 1) - (py0(j) + pvy(j) * t));
+        terms.near = std::max(terms.near, reach_(i) - d);
+      }
+    }
     const double speed2 = vx(k) * vx(k) + vy(k) * vy(k), accel2 = ax(k) * ax(k) + ay(k) * ay(k);
     const double vmax = projection_.speed_max, amax = projection_.accel_max;
     violation += std::max(0.0, penetration) + (speed2 > vmax * vmax ? std::sqrt(speed2) - vmax : 0.0) +

@@ -179,6 +179,9 @@ struct PlannerOptions {
   /// rank plans (Proj-CEM, the follower, the learned planners). 0: the planner's default, which is the
   /// ranking's 1 except for the learned planners (learned_tracking_weight).
   double tracking_weight = 0.0;
+  /// s, the ranking's RankingSettings::moving_reach for the planners that rank plans (0: off, the paper's
+  /// ranking; docs/learning.md, "Room for the layer": not a default, it traded sight between suites).
+  double moving_reach = 0.0;
   /// s, the robot's velocity time constant (Protocol v2's tau; 0: v1). Commands lead the plan by it and by
   /// the latency (command_lead); the safety layer models the robot's lag with it.
   double response_time = 0.0;

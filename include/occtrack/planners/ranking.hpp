@@ -36,6 +36,16 @@ struct RankingSettings {
   double near_weight = 2000.0;
   double near_horizon = 1.5;      ///< seconds
   double near_clearance = 0.4;    ///< metres from an obstacle point to the robot centre: the optimizer's disk radius
+  /// Seconds of a moving obstacle point's speed added to near_clearance for that point (0: off, the default).
+  /// The safety layer refuses a command whose stop comes within a moving point's passive-safety reach (any
+  /// heading, at its speed), so a plan that keeps only the near term's distance from a sliding wall can be
+  /// refused cycle after cycle, and the robot falls back on evasive manoeuvres; this keeps plans farther
+  /// from such points. Measured, it traded sight between suites rather than saving it (docs/learning.md,
+  /// "Room for the layer"), so no planner uses it by default. Only points faster than
+  /// moving_reach_speed_min count, each at most at moving_reach_speed_max (the layer's moving_speed_max).
+  double moving_reach = 0.0;
+  double moving_reach_speed_min = 0.3;  ///< m/s
+  double moving_reach_speed_max = 1.0;  ///< m/s
   core::TrackingBand band;
   /// The target predictor (core/target_predictor.hpp, issue 11): off ranks against the constant-velocity
   /// target (the paper's planners, before issue 11). On, the occlusion and tracking terms use the predicted
@@ -98,6 +108,8 @@ class Ranking {
   /// The collision points column by column (x, y, vx, vy; projection.obstacles rows reserved), so that the
   /// nearest-point search runs in SIMD lanes.
   mutable Eigen::Matrix<double, Eigen::Dynamic, 4> collision_columns_;
+  mutable Eigen::VectorXd reach_;   // per moving collision point: near_clearance plus its moving_reach
+  mutable Eigen::VectorXi reaching_;  // the moving collision points' rows
   /// occlusion::occlusion_cost's candidates (grows to the largest cloud seen, then allocates no more).
   mutable std::vector<int> occluder_candidates_;
 };
