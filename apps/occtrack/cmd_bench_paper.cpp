@@ -127,8 +127,10 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       latency == "auto"
           ? "latency: auto: the planner's median cycle on scans replayed from the suite, measured once per planner, "
             "compute scale and suite before its episodes (not while others run), times the compute scale; then "
-            "held fixed"
-          : "latency: " + latency,
+            "held fixed. A command applies at the first physics step (" +
+                episode_cli::show(1000.0 * episode.physics_step) +
+                " ms) at or after it, and the planners are told that rounded latency (docs/protocol_v2.md)"
+          : "latency: " + latency + " (a command applies at the first physics step at or after it)",
       "compute scales: " + join(scales, ", ") + " (10: a computer ten times slower than this core)",
       "robot response: first-order lag tau " + episode_cli::show(episode.tau) +
           " s; every planner but follower-nolead knows it and leads its command by it (response time " +
