@@ -107,8 +107,9 @@ void Certifier::begin(const core::Scan& scan, const Eigen::Vector2d& robot_veloc
   previous_ = previous_command.allFinite() ? previous_command : Eigen::Vector2d::Zero();
   // Only the moving points that could come near: the robot cannot get farther than `reach` from here.
   const double fastest = std::max({velocity_.norm(), previous_.norm(), settings_.speed_max});
-  const double reach = fastest * (settings_.latency + hold() + settings_.response_time + fastest / settings_.accel_max) +
-                       settings_.clearance() + 0.5;
+  const double reach =
+      fastest * (settings_.latency + hold() + settings_.response_time + fastest / settings_.accel_max) +
+      settings_.clearance() + 0.5;
   moving_.clear();
   groups_.clear();
   failed_at_ = INFINITY;

@@ -163,7 +163,8 @@ MotionEvidence::Verdict MotionEvidence::judge(const MovingPoint* points, std::si
     // Something left: an earlier return near the object where this scan sees free space.
     const double near = radius + options_.reach * (current_.time - earlier->time) + tol;
     const auto left = [&](const Eigen::Vector2d& r) {
-      return r.allFinite() && (r - centre).squaredNorm() <= near * near && current_.free.disk_free(r - current_.robot, tol);
+      return r.allFinite() && (r - centre).squaredNorm() <= near * near &&
+             current_.free.disk_free(r - current_.robot, tol);
     };
     // Over a full circle, only the beams whose bearing (from where the earlier scan was taken) comes within
     // `near` of the centre, with a beam to spare at each end (less than half a turn either side of a bearing

@@ -234,7 +234,8 @@ class Shielded final : public Planner {
     // where thousands of manoeuvres were clear; docs/safety.md).
     for (const double clearance : {certifier_.clearance(), std::min(certifier_.clearance(), s.robot_radius)}) {
       Choice effort;  // farthest from the moving points' futures (Certifier::check), then nearest the wish
-      const Certifier::Verdict rest = certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance, -INFINITY, true);
+      const Certifier::Verdict rest =
+          certifier_.check(Eigen::Vector2d::Zero(), interval, true, clearance, -INFINITY, true);
       if (rest.in_free_space) effort.offer(Eigen::Vector2d::Zero(), rest.min_distance, wish.norm(), interval);
       for (const Candidate& c : candidates_) {
         // A manoeuvre that comes as near as effort.below(gap) cannot be chosen: its check stops there.
@@ -278,7 +279,8 @@ class Shielded final : public Planner {
     const Settings& s = certifier_.settings();
     const FreeSpace& free = certifier_.free_space();
     const double speed = command.norm();
-    const double reach = speed * (s.latency + certifier_.hold() + s.response_time) + speed * speed / (2.0 * s.accel_max);
+    const double reach =
+        speed * (s.latency + certifier_.hold() + s.response_time) + speed * speed / (2.0 * s.accel_max);
     if (!(free.nearest() > 0.0) || !(free.nearest() < s.clearance() + reach)) return std::nullopt;
     const Eigen::Vector2d towards(std::cos(free.nearest_bearing()), std::sin(free.nearest_bearing()));
     const double into = command.dot(towards);
