@@ -350,8 +350,7 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
                       ") while the expert labels (DAgger with a learned planner and --model)")
       ->capture_default_str();
   gen->add_option("--model", o->model, "Model file of a learned --driver");
-  add_tracking_weight_option(gen, o->episode.planner_options.tracking_weight);  // the driver's (dagger.sh: 1)
-  add_moving_reach_option(gen, o->episode.planner_options.moving_reach);  // the driver's
+  add_ranking_options(gen, o->episode.planner_options);  // the driver's (dagger.sh: tracking weight 1)
   gen->add_option("--jobs", o->jobs,
                   "Episodes run at the same time (default: every hardware thread; under MPI, per rank, the "
                   "machine's hardware threads shared among its ranks, at most the CPUs the rank is bound to)");

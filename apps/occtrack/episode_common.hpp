@@ -216,26 +216,23 @@ inline void add_protocol_options(CLI::App* cmd, EpisodeCliOptions& o) {
                     {"always", "line_of_sight"});
 }
 
-/// --tracking-weight W (planners::PlannerOptions::tracking_weight), for `run`, `bench suite` and the driver of
-/// `dataset generate`.
-inline void add_tracking_weight_option(CLI::App* cmd, double& weight) {
+/// The ranking's options, for `run`, `bench suite` and the driver of `dataset generate`: --tracking-weight W
+/// (planners::PlannerOptions::tracking_weight) and --moving-reach S (planners::PlannerOptions::moving_reach).
+inline void add_ranking_options(CLI::App* cmd, planners::PlannerOptions& o) {
   namespace e = episode_cli;
-  cmd->add_option("--tracking-weight", weight,
-                  "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, "
-                  "1 otherwise; docs/learning.md, \"The ranking's tracking weight\")")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1e6); }, "W in [0, 1e6]"))
-      ->capture_default_str();
-}
-
-/// --moving-reach S (planners::PlannerOptions::moving_reach), for `run`, `bench suite` and the driver of
-/// `dataset generate`.
-inline void add_moving_reach_option(CLI::App* cmd, double& reach) {
-  namespace e = episode_cli;
-  cmd->add_option("--moving-reach", reach,
-                  "Ranking: seconds of a moving obstacle's speed by which plans keep farther from it than "
-                  "near_clearance (0: off; docs/learning.md, \"Room for the layer\")")
-      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 10.0); }, "S in [0, 10]"))
-      ->capture_default_str();
+  const auto number = [&](const char* name, double& value, const std::string& help, double high, const char* rule) {
+    cmd->add_option(name, value, help)
+        ->check(e::validator([high](const std::string& t) { return e::check(t, 0.0, high); }, rule))
+        ->capture_default_str();
+  };
+  number("--tracking-weight", o.tracking_weight,
+         "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, 1 "
+         "otherwise; docs/learning.md, \"The ranking's tracking weight\")",
+         1e6, "W in [0, 1e6]");
+  number("--moving-reach", o.moving_reach,
+         "Ranking: seconds of a moving obstacle's speed by which plans keep farther from it than near_clearance "
+         "(0: off; docs/learning.md, \"Room for the layer\")",
+         10.0, "S in [0, 10]");
 }
 
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
@@ -262,8 +259,7 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
                       "; the shipped models were trained through 20)")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
-  add_tracking_weight_option(cmd, o.planner_options.tracking_weight);
-  add_moving_reach_option(cmd, o.planner_options.moving_reach);
+  add_ranking_options(cmd, o.planner_options);
   cmd->add_option("--waypoints", o.planner_options.waypoints,
                   "AutoChaser: true future target points given as prior (0: constant-velocity prediction)")
       ->check(e::validator([](const std::string& t) { return e::check_integer(t, 0); }, "INT >= 0"))
