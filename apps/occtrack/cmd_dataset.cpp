@@ -87,10 +87,11 @@ std::string canonical_command(const GenerateOptions& o) {
                      join(o.worlds) + " --speeds " + speeds_text(o) + " --label-every " +
                      std::to_string(o.label_every) + " --driver " + o.driver;
   if (!o.model.empty()) text += " --model " + o.model;
-  if (o.driver != "expert")
-    text += " --tracking-weight " + number_text(planners::tracking_weight_for(o.driver, o.episode.planner_options));
-  if (o.driver != "expert" && o.episode.planner_options.moving_reach > 0.0)
-    text += " --moving-reach " + number_text(o.episode.planner_options.moving_reach);
+  if (o.driver != "expert") {
+    const planners::PlannerOptions& driver = o.episode.planner_options;
+    text += " --tracking-weight " + number_text(planners::tracking_weight_for(o.driver, driver));
+    if (driver.moving_reach > 0.0) text += " --moving-reach " + number_text(driver.moving_reach);
+  }
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
   const EpisodeCliOptions& e = o.episode;

@@ -35,6 +35,13 @@ double command_lead(const PlannerOptions& options) { return options.response_tim
 
 namespace {
 
+/// The ranking settings the command line's options set, for every planner that ranks plans.
+void rank_as_asked(RankingSettings& ranking, const std::string& name, const PlannerOptions& options) {
+  ranking.predict_target = options.predictor;
+  ranking.tracking_weight = tracking_weight_for(name, options);
+  ranking.moving_reach = options.moving_reach;
+}
+
 std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {
   if (name == "projcem" || name == "projcem-expert") {
     ProjCemSettings s = name == "projcem-expert" || options.offline_expert
@@ -44,17 +51,13 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     s.seed = options.seed;
     s.response_time = command_lead(options);
     s.projection.threads = std::max(1, options.threads);
-    s.ranking.predict_target = options.predictor;
-    s.ranking.tracking_weight = tracking_weight_for(name, options);
-    s.ranking.moving_reach = options.moving_reach;
+    rank_as_asked(s.ranking, name, options);
     return std::make_unique<ProjCem>(s);
   }
   if (name == "follower") {
     FollowerSettings s;
     s.response_time = command_lead(options);
-    s.ranking.predict_target = options.predictor;
-    s.ranking.tracking_weight = tracking_weight_for(name, options);
-    s.ranking.moving_reach = options.moving_reach;
+    rank_as_asked(s.ranking, name, options);
     return std::make_unique<Follower>(s);
   }
   if (name == "autochaser") {
@@ -73,9 +76,7 @@ std::unique_ptr<Planner> make_bare_planner(const std::string& name, const Planne
     if (options.iterations > 0) s.projection.iterations = options.iterations;
     s.seed = options.seed;
     s.response_time = command_lead(options);
-    s.ranking.predict_target = options.predictor;
-    s.ranking.tracking_weight = tracking_weight_for(name, options);
-    s.ranking.moving_reach = options.moving_reach;
+    rank_as_asked(s.ranking, name, options);
     return std::make_unique<LearnedPolicy>(s);
   }
   std::string known;
