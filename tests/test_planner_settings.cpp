@@ -108,6 +108,23 @@ TEST(PlannerSettings, RankingKeepsMoreRoomFromAMovingPointOnly) {
   EXPECT_EQ(near(0.5, slow), 0.0);                     // under moving_reach_speed_min: a still object's jitter
   EXPECT_NEAR(near(0.5, fast), 0.4 + 1.0 * 0.5 - 0.8, 1e-12);  // speed capped at moving_reach_speed_max
   EXPECT_NEAR(near(1.0, crossing), 0.4 + 0.5 * 1.0 - 0.6, 1e-12);
+
+  // Behind the safety layer only the points it takes for moving count, whatever their speed estimates.
+  planners::RankingSettings r;
+  r.moving_reach = 0.5;
+  const planners::Ranking ranking(r, projection);
+  planners::PointRows points(2, 4);
+  points.row(0) << 1.0, 0.0, 0.0, 0.0;
+  points.row(1) = crossing;
+  planners::RowMask moving(2);
+  moving << false, false;  // the layer's evidence shows the crossing point still (a static wall's drift)
+  EXPECT_EQ(ranking.evaluate(still, target, points, points, nullptr, nullptr, &moving).near, 0.0);
+  moving << false, true;
+  EXPECT_NEAR(ranking.evaluate(still, target, points, points, nullptr, nullptr, &moving).near, 0.4 + 0.25 - 0.6,
+              1e-12);
+  const planners::RowMask other(3, false);  // not one flag per point: speed alone decides
+  EXPECT_NEAR(ranking.evaluate(still, target, points, points, nullptr, nullptr, &other).near, 0.4 + 0.25 - 0.6,
+              1e-12);
 }
 
 TEST(PlannerSettings, ProjCemNamesEveryBrokenField) {

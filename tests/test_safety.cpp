@@ -1220,6 +1220,82 @@ TEST(SharedPerception, APlannerPlansOnTheLayersPerceptionAsOnItsOwn) {
   }
 }
 
+/// A planner that keeps what the layer offered it each cycle: the rows it perceived and which it takes for moving.
+class Watcher final : public planners::Planner {
+ public:
+  std::string name() const override { return "watcher"; }
+  void reset() override {}
+  using Planner::plan;
+  void plan(const planners::PlannerInput& input, planners::PlannerOutput& out) override {
+    out.ok = true;
+    out.command_velocity = Vec2::Zero();
+    out.compute_ms = 0.0;
+    ASSERT_NE(input.perceived, nullptr);
+    ASSERT_NE(input.perceived->moving, nullptr);
+    nearest = input.perceived->observation->nearest;
+    moving = *input.perceived->moving;
+  }
+  const planners::PlanRecord& last_record() const override { return record_; }
+  planners::PointRows nearest;
+  planners::RowMask moving;
+
+ private:
+  planners::PlanRecord record_;
+};
+
+TEST(SharedPerception, TheLayerTellsThePlannerWhichPointsMove) {
+  // The robot passes two static boxes at 1.5 m/s while a cube comes at it at 0.6 m/s. Perception's velocity
+  // estimates drift on the static boxes as the view of them changes; the layer's motion evidence shows them
+  // still, and only the cube's points, which it shows moved, are offered as moving (RankingSettings::
+  // moving_reach uses the flags).
+  auto owned = std::make_unique<Watcher>();
+  Watcher& watcher = *owned;
+  auto shielded = planners::safety::make_shielded(std::move(owned), planners::safety::Settings{});
+  const Vec2 cube_size(0.6, 0.6), box_size(0.6, 0.6), wall_size(3.0, 0.3);
+  const Vec2 box_at(3.0, 1.5), wall_at(2.0, -2.0);
+  const auto cube_at = [](double t) { return Vec2(4.0 - 0.6 * t, 0.2); };
+  const auto robot_at = [](double t) { return Vec2(1.5 * t, 0.0); };
+  const auto on = [](const Vec2& p, const Vec2& centre, const Vec2& size) {
+    return ((p - centre).cwiseAbs() - 0.5 * size).maxCoeff() < 0.1;
+  };
+  int cube_moving = 0, cube_rows = 0, still_drifting = 0, still_flagged = 0;
+  for (int k = 0; k <= 24; ++k) {
+    const double t = 0.05 * k;
+    core::Scan scan = world_scan({box(box_at, box_size), box(wall_at, wall_size), box(cube_at(t), cube_size)},
+                                 robot_at(t));
+    scan.time = t;
+    planners::PlannerInput input;
+    input.time = t;
+    input.robot_position = robot_at(t);
+    input.robot_velocity = Vec2(1.5, 0.0);
+    input.target_position = Vec2(6.0, 0.0);
+    input.scan = &scan;
+    shielded->plan(input);
+    ASSERT_EQ(watcher.moving.size(), watcher.nearest.rows());
+    for (Eigen::Index i = 0; i < watcher.nearest.rows(); ++i) {
+      if (i > 0 && watcher.nearest.row(i) == watcher.nearest.row(0)) continue;  // perception's padding
+      const Vec2 world = robot_at(t) + watcher.nearest.row(i).head<2>().transpose();
+      const bool reported = watcher.nearest.row(i).tail<2>().squaredNorm() > 0.0;
+      if (!reported) {
+        EXPECT_FALSE(watcher.moving(i)) << "a point without a velocity estimate, cycle " << k;
+        continue;
+      }
+      if (k < 16) continue;  // the evidence needs scans 0.5 s old
+      if (on(world, cube_at(t), cube_size)) {
+        ++cube_rows;
+        cube_moving += watcher.moving(i);
+      } else if (on(world, box_at, box_size) || on(world, wall_at, wall_size)) {
+        ++still_drifting;
+        still_flagged += watcher.moving(i);
+      }
+    }
+  }
+  ASSERT_GT(cube_rows, 20) << "the cube must be tracked, or nothing is compared";
+  EXPECT_EQ(cube_moving, cube_rows);
+  ASSERT_GT(still_drifting, 0) << "perception must report some static points moving, or nothing is compared";
+  EXPECT_EQ(still_flagged, 0);
+}
+
 }  // namespace
 }  // namespace occtrack
 

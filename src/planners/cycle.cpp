@@ -131,6 +131,11 @@ bool Context::observe(const PlannerInput& input, Frame& frame, CycleClock& clock
     frame.target.head<2>() += input.target_velocity * carried;
   }
   frame.nearest = seen->nearest.topRows(own.nearest_count);
+  if (seen != &observation_ && input.perceived->moving != nullptr &&
+      input.perceived->moving->size() >= own.nearest_count)
+    frame.moving = input.perceived->moving->head(own.nearest_count);
+  else
+    frame.moving.resize(0);
   frame.cloud = seen->cloud;
   frame.scan = input.scan;
   // Occluders: the nearest points (with velocity estimates), then the rest of the distinct cloud points.

@@ -49,7 +49,7 @@ void Follower::plan(const PlannerInput& input, PlannerOutput& out) {
   // The follower does not rank; its record still carries what the ranking makes of its plan.
   const RankingTerms terms =
       s.context.ranking().evaluate(s.record.xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
-                                  &frame.forecast);
+                                  &frame.forecast, &frame.moving);
   s.context.finish_plan(out, s.record, clock, s.record.xi, terms);
 }
 

@@ -309,7 +309,7 @@ void LearnedPolicy::plan(const PlannerInput& input, PlannerOutput& out) {
     if (!xi.allFinite()) continue;
     const RankingTerms terms =
         s.context.ranking().evaluate(xi, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
-                                    &frame.forecast);
+                                    &frame.forecast, &frame.moving);
     s.costs[b] = terms.total;
     if (std::isfinite(s.costs[b]) && (best < 0 || s.costs[b] < s.costs[best])) {
       best = b;

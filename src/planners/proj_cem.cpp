@@ -124,7 +124,7 @@ void ProjCem::plan(const PlannerInput& input, PlannerOutput& out) {
       s.scored = s.optimizer.result.xi.row(b).cast<double>();
       const RankingTerms terms =
           s.context.ranking().evaluate(s.scored, frame.target, frame.nearest, frame.occluders_view(), frame.scan,
-                                       &frame.forecast);
+                                       &frame.forecast, &frame.moving);
       s.costs[b] = terms.total;
       if (terms.total < best_cost) {
         best_cost = terms.total;

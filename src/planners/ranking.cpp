@@ -91,7 +91,7 @@ double shadow_depth(const Eigen::MatrixX2d& positions, int last, int stride, con
 RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_row, const Eigen::Vector4d& target,
                                const Eigen::Ref<const PointRows>& collision_points,
                                const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan,
-                               const TargetForecast* forecast) const {
+                               const TargetForecast* forecast, const RowMask* moving) const {
   const int n = projection_.coefficients(), m = projection_.steps;
   // The same products, in the same kind of buffers, as a fresh evaluation would use (results bit for bit).
   Eigen::VectorXd &cx = cx_, &cy = cy_, &vx = vx_, &vy = vy_, &ax = ax_, &ay = ay_;
@@ -134,8 +134,10 @@ RankingTerms Ranking::evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi_ro
   const auto pvx = collision_columns_.col(2).head(N).array(), pvy = collision_columns_.col(3).head(N).array();
   // The moving points whose near clearance grows (moving_reach), and that clearance.
   int reaching = 0;
+  const bool judged = moving != nullptr && moving->size() == N;
   if (settings_.moving_reach > 0.0)
     for (Eigen::Index j = 0; j < N; ++j) {
+      if (judged && !(*moving)(j)) continue;
       const double speed = std::hypot(pvx(j), pvy(j));
       if (!(speed > settings_.moving_reach_speed_min)) continue;
       reaching_(reaching) = static_cast<int>(j);

@@ -33,6 +33,9 @@ struct SharedPerception {
   const perception::Observation* observation = nullptr;
   double ms = 0.0;    ///< what perceiving took
   bool used = false;  ///< set by the planner that used it
+  /// Per row of observation->nearest, when not null: whether the wrapper's evidence shows that point's object
+  /// moved (the safety layer's MotionEvidence, planners/safety.hpp). Frame::moving copies it.
+  const RowMask* moving = nullptr;
 };
 
 struct PlannerInput {
@@ -115,6 +118,9 @@ struct Frame {
   /// The predicted target at every step, when the planner's ranking predicts it (RankingSettings::predict_target).
   TargetForecast forecast;
   PointRows nearest;    ///< the optimizer's obstacles, N x 4 (padded as perception pads)
+  /// Per row of `nearest`: shown moved by the safety layer (SharedPerception::moving); empty when no layer
+  /// judged this cycle's points (RankingSettings::moving_reach then goes by speed alone).
+  RowMask moving;
   /// Every distinct point that can block the view (x, y, vx, vy): the first `occluder_count` rows. The
   /// storage keeps the cloud's size so that a cycle allocates nothing; use occluders_view().
   PointRows occluders;

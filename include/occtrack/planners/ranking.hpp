@@ -43,6 +43,8 @@ struct RankingSettings {
   /// from such points. Measured, it traded sight between suites rather than saving it (docs/learning.md,
   /// "Room for the layer"), so no planner uses it by default. Only points faster than
   /// moving_reach_speed_min count, each at most at moving_reach_speed_max (the layer's moving_speed_max).
+  /// Behind the safety layer, only the points its motion evidence shows moved count (evaluate()'s `moving`):
+  /// perception's velocity estimates drift on static walls, which this term would take for motion.
   double moving_reach = 0.0;
   double moving_reach_speed_min = 0.3;  ///< m/s
   double moving_reach_speed_max = 1.0;  ///< m/s
@@ -69,6 +71,8 @@ struct RankingTerms {
 };
 
 using PointRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+/// One flag per row of a PointRows.
+using RowMask = Eigen::Array<bool, Eigen::Dynamic, 1>;
 
 /// The predicted target at every step of the plan (robot-centric), and each step's weight (see
 /// RankingSettings::predict_target). `valid` false: rank against the linear target instead.
@@ -90,10 +94,12 @@ class Ranking {
   /// occlusion_points: every point that can block the view (x, y, vx, vy). scan: the cycle's scan, taken
   /// at the robot-centric origin, for the shadow term (null: no shadow term). forecast: when given and valid
   /// (one row per step), the occlusion and tracking terms use its positions and weights instead of `target`.
+  /// moving: when given with one flag per collision point, only flagged points can count as moving for
+  /// RankingSettings::moving_reach (the safety layer's verdict, SharedPerception::moving); else speed decides.
   RankingTerms evaluate(const Eigen::Ref<const Eigen::RowVectorXd>& xi, const Eigen::Vector4d& target,
                         const Eigen::Ref<const PointRows>& collision_points,
                         const Eigen::Ref<const PointRows>& occlusion_points, const core::Scan* scan = nullptr,
-                        const TargetForecast* forecast = nullptr) const;
+                        const TargetForecast* forecast = nullptr, const RowMask* moving = nullptr) const;
 
   const core::BernsteinBasis& basis() const { return basis_; }
 

@@ -19,6 +19,8 @@ class Shielded final : public Planner {
       : inner_(std::move(inner)), certifier_(settings), perception_(perception_settings(certifier_.hold())) {
     if (!inner_) throw std::invalid_argument("safety: no planner to wrap");
     moving_.reserve(static_cast<std::size_t>(2 * perception_.settings().nearest_count));
+    moving_velocities_.reserve(static_cast<std::size_t>(perception_.settings().nearest_count));
+    shown_moved_.resize(perception_.settings().nearest_count);
     const int directions = certifier_.settings().evasive_directions;
     candidates_.reserve(static_cast<std::size_t>(6 * directions));
     refused_.reserve(detail::kRankedCommands + 1);  // the planned command and its candidates: no allocation per cycle
@@ -81,25 +83,29 @@ class Shielded final : public Planner {
     const auto added = Clock::now();
     observed_ = usable && perception_.process(*input.scan, input.robot_position, observation_, nullptr);
     const auto perceived = Clock::now();
-    shared_ = SharedPerception{&perception_.settings(), &observation_, ms(added, perceived), false};
+    classify(input);
+    const auto classified = Clock::now();
+    shared_ = SharedPerception{&perception_.settings(), &observation_, ms(added, perceived), false,
+                               &shown_moved_};
     PlannerInput passed = input;
     passed.perceived = observed_ ? &shared_ : nullptr;
     inner_->plan(passed, out);
     const auto resume = Clock::now();
     choose(input, out);
-    out.compute_ms += ms(start, added) + (shared_.used ? 0.0 : shared_.ms) + ms(resume, Clock::now());
+    out.compute_ms += ms(start, added) + (shared_.used ? 0.0 : shared_.ms) + ms(perceived, classified) +
+                      ms(resume, Clock::now());
   }
 
  private:
-  void choose(const PlannerInput& input, PlannerOutput& out) {
-    const Eigen::Vector2d planned = out.command_velocity;
-    out.command_velocity.setZero();
-    out.safety = SafetyAction::brake;
-    if (input.scan == nullptr || !input.robot_position.allFinite() || !input.robot_velocity.allFinite()) {
-      remember(out);
-      return;  // nothing to certify against: full brake
-    }
+  /// Which of this cycle's perceived points may move (moving_, for the certifier: everything not shown still),
+  /// and which the LiDAR's own evidence shows moved (shown_moved_, per row of observation_.nearest, offered
+  /// to the planner for its ranking: RankingSettings::moving_reach). Before the planner plans, so that it can
+  /// be told. Perception's velocity estimates drift on static walls, and objects just come into view are
+  /// "unknown": the certifier must count both as moving, a preference need not (docs/learning.md, "Room for
+  /// the layer").
+  void classify(const PlannerInput& input) {
     moving_.clear();
+    moving_velocities_.clear();
     if (observed_) {  // this cycle's perception (plan())
       const auto& nearest = observation_.nearest;
       forget_before(input.time - kMovingMemory);
@@ -135,6 +141,7 @@ class Shielded final : public Planner {
           continue;
         const Eigen::Vector2d velocity = moving_[first].velocity;
         fastest_moving_ = std::max(fastest_moving_, velocity.norm());
+        if (verdict == MotionEvidence::Verdict::moved) moving_velocities_.push_back(velocity);
         for (std::size_t i = first; i < last; ++i) {
           memorize(fresh, input.robot_position + moving_[i].position, velocity, input.time,
                    verdict != MotionEvidence::Verdict::still);
@@ -142,6 +149,17 @@ class Shielded final : public Planner {
         }
       }
       moving_.resize(kept);
+      // Each row of the observation, flagged when its object moved (found by velocity: one per object).
+      shown_moved_.resize(nearest.rows());
+      shown_moved_.setConstant(false);
+      for (Eigen::Index i = 0; i < rows; ++i) {
+        const Eigen::Vector2d velocity(nearest(i, 2), nearest(i, 3));
+        if (!velocity.allFinite() || velocity.isZero()) continue;
+        shown_moved_(i) =
+            std::find(moving_velocities_.begin(), moving_velocities_.end(), velocity) != moving_velocities_.end();
+      }
+      // Padding rows repeat row 0.
+      if (rows > 0) shown_moved_.tail(nearest.rows() - rows).setConstant(shown_moved_(0));
       for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
@@ -155,6 +173,16 @@ class Shielded final : public Planner {
             (evidence_added_ && fastest_moving_ > 0.0 && !evidence_.seen_before(position)))
           moving_.push_back({position, Eigen::Vector2d::Zero()});
       }
+    }
+  }
+
+  void choose(const PlannerInput& input, PlannerOutput& out) {
+    const Eigen::Vector2d planned = out.command_velocity;
+    out.command_velocity.setZero();
+    out.safety = SafetyAction::brake;
+    if (input.scan == nullptr || !input.robot_position.allFinite() || !input.robot_velocity.allFinite()) {
+      remember(out);
+      return;  // nothing to certify against: full brake
     }
     // Adding this scan to the motion evidence built its free space: the certifier uses that one.
     const FreeSpace* built = evidence_added_ ? &evidence_.free_space() : nullptr;
@@ -386,6 +414,8 @@ class Shielded final : public Planner {
   SharedPerception shared_;  // observation_, as offered to the planner
   MotionEvidence evidence_;
   std::vector<MovingPoint> moving_;
+  std::vector<Eigen::Vector2d> moving_velocities_;  // this cycle's, one per object shown moved (classify())
+  RowMask shown_moved_;  // per row of observation_.nearest: shown moved (classify())
   Eigen::Vector2d previous_ = Eigen::Vector2d::Zero();
   bool has_previous_ = false;
   Eigen::Vector2d evasive_ = Eigen::Vector2d::Zero();  // the evasive manoeuvre under way
