@@ -21,6 +21,8 @@ TrackerConfig default_tracker_config() {
   c.predictor = o.predictor;
   c.passive_turn = o.passive_turn;
   c.standoff = o.standoff;
+  c.tracking_weight = o.tracking_weight;
+  c.moving_reach = o.moving_reach;
   c.planning_period = o.planning_period;
   c.accel_max = o.accel_max;
   c.response_time = o.response_time;
@@ -45,6 +47,8 @@ planners::TrackerSettings to_settings(const TrackerConfig& c) {
   o.predictor = c.predictor;
   o.passive_turn = c.passive_turn;
   o.standoff = c.standoff;
+  o.tracking_weight = c.tracking_weight;
+  o.moving_reach = c.moving_reach;
   o.planning_period = c.planning_period;
   o.accel_max = c.accel_max;
   o.response_time = c.response_time;
