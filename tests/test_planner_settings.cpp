@@ -109,7 +109,7 @@ TEST(PlannerSettings, RankingKeepsMoreRoomFromAMovingPointOnly) {
   EXPECT_NEAR(near(0.5, fast), 0.4 + 1.0 * 0.5 - 0.8, 1e-12);  // speed capped at moving_reach_speed_max
   EXPECT_NEAR(near(1.0, crossing), 0.4 + 0.5 * 1.0 - 0.6, 1e-12);
 
-  // Behind the safety layer only the points it takes for moving count, whatever their speed estimates.
+  // Behind the safety layer only the points its evidence shows moved count, whatever their speed estimates.
   planners::RankingSettings r;
   r.moving_reach = 0.5;
   const planners::Ranking ranking(r, projection);

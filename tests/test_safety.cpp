@@ -1220,7 +1220,7 @@ TEST(SharedPerception, APlannerPlansOnTheLayersPerceptionAsOnItsOwn) {
   }
 }
 
-/// A planner that keeps what the layer offered it each cycle: the rows it perceived and which it takes for moving.
+/// A planner that keeps what the layer offered it each cycle: the rows it perceived and which of them moved.
 class Watcher final : public planners::Planner {
  public:
   std::string name() const override { return "watcher"; }
@@ -1293,7 +1293,7 @@ TEST(SharedPerception, TheLayerTellsThePlannerWhichPointsMove) {
   ASSERT_GT(cube_rows, 20) << "the cube must be tracked, or nothing is compared";
   EXPECT_EQ(cube_moving, cube_rows);
   ASSERT_GT(still_drifting, 0) << "perception must report some static points moving, or nothing is compared";
-  EXPECT_EQ(still_flagged, 0);
+  EXPECT_EQ(still_flagged, 0) << "of " << still_drifting << " static rows reported moving";
 }
 
 }  // namespace
