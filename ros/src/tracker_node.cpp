@@ -12,7 +12,6 @@
 #include <std_msgs/String.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <cmath>
 #include <exception>
 #include <optional>
 #include <stdexcept>
@@ -83,10 +82,9 @@ class TrackerNode {
     pnh.param("predictor", s.predictor, s.predictor);
     pnh.param("passive_turn", s.passive_turn, s.passive_turn);  // the safety layer refuses bad values by name
     pnh.param("standoff", s.standoff, s.standoff);
+    // The ranking's two options; the ranking refuses bad values by name.
     pnh.param("tracking_weight", s.tracking_weight, s.tracking_weight);
-    if (!(s.tracking_weight >= 0.0 && std::isfinite(s.tracking_weight)))
-      throw std::invalid_argument("~tracking_weight must be a number >= 0 (0: the planner's default)");
-    pnh.param("moving_reach", s.moving_reach, s.moving_reach);  // the ranking refuses a bad value by name
+    pnh.param("moving_reach", s.moving_reach, s.moving_reach);
     double rate = 20.0;
     pnh.param("rate", rate, rate);
     if (!(rate > 0.0 && rate <= 1000.0)) throw std::invalid_argument("~rate must lie in (0, 1000] Hz");

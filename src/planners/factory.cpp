@@ -26,7 +26,8 @@ std::optional<policy::Variant> learned_variant(const std::string& name) {
 }  // namespace
 
 double tracking_weight_for(const std::string& name, const PlannerOptions& options) {
-  if (options.tracking_weight > 0) return options.tracking_weight;
+  // Only 0 means "the planner's default": anything else is passed on, for the ranking to refuse by name.
+  if (options.tracking_weight != 0) return options.tracking_weight;
   if (const auto variant = learned_variant(name)) return learned_tracking_weight(*variant);
   return RankingSettings{}.tracking_weight;
 }

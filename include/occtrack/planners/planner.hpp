@@ -212,9 +212,10 @@ double command_lead(const PlannerOptions& options);
 
 /// Names the command line accepts, e.g. "projcem", "follower".
 std::vector<std::string> planner_names();
-/// The ranking's tracking weight the planner `name` gets from make_planner: options.tracking_weight when
-/// positive, else the planner's default (learned_tracking_weight for the learned planners, the ranking's 1
-/// for the others; AutoChaser ranks nothing and ignores it).
+/// The ranking's tracking weight the planner `name` gets from make_planner: options.tracking_weight unless it
+/// is 0, else the planner's default (learned_tracking_weight for the learned planners, the ranking's 1 for
+/// the others; AutoChaser ranks nothing and ignores it). A negative or non-finite weight is returned as it is,
+/// and make_planner then refuses it ("ranking.tracking_weight ...").
 double tracking_weight_for(const std::string& name, const PlannerOptions& options);
 /// Builds a planner by name; throws std::invalid_argument listing the known names otherwise.
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options = {});

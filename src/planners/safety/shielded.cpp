@@ -149,17 +149,16 @@ class Shielded final : public Planner {
         }
       }
       moving_.resize(kept);
-      // Each row of the observation, flagged when its object moved (found by velocity: one per object).
+      // Each row of the observation (padding too: a copy of row 0), flagged when its object moved (found by
+      // velocity: one per object).
       shown_moved_.resize(nearest.rows());
       shown_moved_.setConstant(false);
-      for (Eigen::Index i = 0; i < rows; ++i) {
-        const Eigen::Vector2d velocity(nearest(i, 2), nearest(i, 3));
-        if (!velocity.allFinite() || velocity.isZero()) continue;
-        shown_moved_(i) =
-            std::find(moving_velocities_.begin(), moving_velocities_.end(), velocity) != moving_velocities_.end();
-      }
-      // Padding rows repeat row 0.
-      if (rows > 0) shown_moved_.tail(nearest.rows() - rows).setConstant(shown_moved_(0));
+      if (!moving_velocities_.empty())
+        for (Eigen::Index i = 0; i < nearest.rows(); ++i) {
+          const Eigen::Vector2d velocity(nearest(i, 2), nearest(i, 3));
+          shown_moved_(i) =
+              std::find(moving_velocities_.begin(), moving_velocities_.end(), velocity) != moving_velocities_.end();
+        }
       for (Eigen::Index i = 0; i < rows; ++i) {
         const Eigen::Vector2d position(nearest(i, 0), nearest(i, 1));
         if (!position.allFinite() || nearest(i, 2) != 0.0 || nearest(i, 3) != 0.0) continue;
