@@ -20,6 +20,8 @@
 #   ROUND_STEPS   training steps of each round's cvae [1200]
 #   DRIVER_TRACKING_WEIGHT   the driving cvae's ranking weight on the tracking distance [1: as the shipped
 #                 models' rounds were driven, before the planner's default became 5]
+#   DRIVER_MOVING_REACH      the driving cvae's moving reach, s [0: as the shipped models' rounds were driven,
+#                 before the cvae's default behind the layer became 1]
 #   VARIANTS      the final models, side by side: any of cvae bc fixed-q [cvae]
 #   STEPS, BC_STEPS, BATCH, MAX_MINUTES, THREADS, SNAPSHOT_EVERY   the final training (scripts/train_models.sh)
 #                 [2000, 8000, 256, none, all cores, 250]
@@ -65,7 +67,7 @@ for (( r = 1; r <= rounds; r++ )); do
   train_round $(( r - 1 ))
   generate "$data/demo-r$r.safetensors" --seed $(( 20000 + 1000 * r )) --episodes "$episodes" \
     --duration "${DURATION:-30}" --driver cvae --model "$data/cvae-r$(( r - 1 )).safetensors" \
-    --tracking-weight "${DRIVER_TRACKING_WEIGHT:-1}"
+    --tracking-weight "${DRIVER_TRACKING_WEIGHT:-1}" --moving-reach "${DRIVER_MOVING_REACH:-0}"
 done
 echo "dagger.sh: data done after $(( ($(date +%s) - start) / 60 )) min" >&2
 

@@ -763,6 +763,41 @@ TEST(PolicyModel, TheFactoryRanksWithTheVariantsTrackingWeight) {
   EXPECT_TRUE(cost_differs) << "weights 5 and 1 ranked every cycle at the same cost";
 }
 
+TEST(PolicyModel, TheFactoryGivesTheCvaeItsMovingReachBehindTheLayerOnly) {
+  // Unset, the moving reach is the planner's default: 1 s for the cvae at B >= 30 behind the safety layer
+  // (which says which points moved), 0 for every other planner, batch, or without the layer; a set value,
+  // 0 included, replaces the default everywhere.
+  planners::PlannerOptions options;
+  options.shield = true;
+  EXPECT_EQ(planners::moving_reach_for("cvae", options), 1.0);
+  for (const char* name : {"bc", "cvae-fixed-q", "projcem", "follower", "autochaser"})
+    EXPECT_EQ(planners::moving_reach_for(name, options), 0.0) << name;
+  options.batch = 5;
+  EXPECT_EQ(planners::moving_reach_for("cvae", options), 0.0);
+  options.batch = 30;
+  options.shield = false;
+  EXPECT_EQ(planners::moving_reach_for("cvae", options), 0.0);
+  for (const bool shield : {false, true}) {
+    options.shield = shield;
+    options.moving_reach = 0.0;
+    EXPECT_EQ(planners::moving_reach_for("cvae", options), 0.0);
+    options.moving_reach = 0.5;
+    for (const char* name : {"cvae", "bc", "projcem"}) EXPECT_EQ(planners::moving_reach_for(name, options), 0.5);
+  }
+
+  // A negative reach is passed on and refused by the ranking, by name.
+  const std::string path = test::temp_path("moving-reach.safetensors");
+  planners::PlannerOptions bad = random_cvae_options(path, 4);
+  bad.moving_reach = -1.0;
+  try {
+    planners::make_planner("cvae", bad);
+    ADD_FAILURE() << "a negative moving reach was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("moving_reach"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
 // ------------------------------------------------------------------------------------------------------------
 // The planner.
 

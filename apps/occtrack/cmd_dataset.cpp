@@ -90,7 +90,9 @@ std::string canonical_command(const GenerateOptions& o) {
   if (o.driver != "expert") {
     const planners::PlannerOptions& driver = o.episode.planner_options;
     text += " --tracking-weight " + number_text(planners::tracking_weight_for(o.driver, driver));
-    if (driver.moving_reach > 0.0) text += " --moving-reach " + number_text(driver.moving_reach);
+    // The reach in effect; none when off, so that files made before it had a default keep their bytes.
+    const double reach = planners::moving_reach_for(o.driver, driver);
+    if (reach > 0.0) text += " --moving-reach " + number_text(reach);
   }
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);

@@ -220,19 +220,19 @@ inline void add_protocol_options(CLI::App* cmd, EpisodeCliOptions& o) {
 /// (planners::PlannerOptions::tracking_weight) and --moving-reach S (planners::PlannerOptions::moving_reach).
 inline void add_ranking_options(CLI::App* cmd, planners::PlannerOptions& o) {
   namespace e = episode_cli;
-  const auto number = [&](const char* name, double& value, const std::string& help, double high, const char* rule) {
-    cmd->add_option(name, value, help)
-        ->check(e::validator([high](const std::string& t) { return e::check(t, 0.0, high); }, rule))
-        ->capture_default_str();
-  };
-  number("--tracking-weight", o.tracking_weight,
-         "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, 1 "
-         "otherwise; docs/learning.md, \"The ranking's tracking weight\")",
-         1e6, "W in [0, 1e6]");
-  number("--moving-reach", o.moving_reach,
+  cmd->add_option("--tracking-weight", o.tracking_weight,
+                  "Ranking's weight on the distance to the target (0: the planner's default: 5 for cvae and bc, 1 "
+                  "otherwise; docs/learning.md, \"The ranking's tracking weight\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 1e6); }, "W in [0, 1e6]"))
+      ->capture_default_str();
+  // Unset unless given (std::optional): the planner's default, which depends on the planner, its batch and
+  // the safety layer (planners::moving_reach_for).
+  cmd->add_option_function<double>(
+         "--moving-reach", [&o](double value) { o.moving_reach = value; },
          "Ranking: seconds of a moving obstacle's speed by which plans keep farther from it than near_clearance "
-         "(0: off; docs/learning.md, \"Room for the layer\")",
-         10.0, "S in [0, 10]");
+         "(0: off; default: 1 for the cvae at --batch >= 30 behind the safety layer, else 0; docs/learning.md, "
+         "\"The moving reach by default\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, 10.0); }, "S in [0, 10]"));
 }
 
 inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {

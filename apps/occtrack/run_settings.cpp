@@ -36,7 +36,7 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"batch", p.batch},
                   {"iterations", p.iterations},
                   {"tracking_weight", planners::tracking_weight_for(planner, p)},
-                  {"moving_reach_s", p.moving_reach},
+                  {"moving_reach_s", planners::moving_reach_for(planner, p)},
                   {"keep_last_plan", p.keep_last_plan},
                   {"rank_stop", p.rank_stop},
                   {"samples", p.samples},
@@ -75,7 +75,7 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
     << ", predictor " << (p.predictor ? "on" : "off")
     << ", tracking weight " << planners::tracking_weight_for(planner, p);
-  if (p.moving_reach > 0.0) s << ", moving reach " << p.moving_reach << " s";
+  if (const double reach = planners::moving_reach_for(planner, p); reach > 0.0) s << ", moving reach " << reach << " s";
   s << ", latency ";
   if (e.latency_ms)
     s << *e.latency_ms << " ms";

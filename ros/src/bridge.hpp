@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,7 +22,8 @@ struct TrackerConfig {
   int batch = 0;
   bool shield = false, predictor = false;
   double passive_turn = 0.0, standoff = 0.0;  // the safety layer's assumptions about moving obstacles
-  double tracking_weight = 0.0, moving_reach = 0.0;  // the ranking's (PlannerOptions: 0 is the default, off)
+  double tracking_weight = 0.0;         // the ranking's (PlannerOptions: 0 is the planner's default)
+  std::optional<double> moving_reach;  // the ranking's (PlannerOptions: unset is the planner's default)
   double planning_period = 0.0, accel_max = 0.0, response_time = 0.0, latency = 0.0;
   double target_timeout = 0.0, scan_timeout = 0.0, robot_timeout = 0.0, future_tolerance = 0.0;
   double min_valid_share = 0.0, max_invalid_gap = 0.0;

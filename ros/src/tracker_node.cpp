@@ -84,7 +84,7 @@ class TrackerNode {
     pnh.param("standoff", s.standoff, s.standoff);
     // The ranking's two options; the ranking refuses bad values by name.
     pnh.param("tracking_weight", s.tracking_weight, s.tracking_weight);
-    pnh.param("moving_reach", s.moving_reach, s.moving_reach);
+    if (double reach = 0.0; pnh.getParam("moving_reach", reach)) s.moving_reach = reach;
     double rate = 20.0;
     pnh.param("rate", rate, rate);
     if (!(rate > 0.0 && rate <= 1000.0)) throw std::invalid_argument("~rate must lie in (0, 1000] Hz");

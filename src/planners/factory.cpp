@@ -32,6 +32,13 @@ double tracking_weight_for(const std::string& name, const PlannerOptions& option
   return RankingSettings{}.tracking_weight;
 }
 
+double moving_reach_for(const std::string& name, const PlannerOptions& options) {
+  if (options.moving_reach) return *options.moving_reach;
+  if (!options.shield) return 0.0;
+  if (const auto variant = learned_variant(name)) return learned_moving_reach(*variant, options.batch);
+  return 0.0;
+}
+
 double command_lead(const PlannerOptions& options) { return options.response_time + options.latency; }
 
 namespace {
@@ -40,7 +47,7 @@ namespace {
 void rank_as_asked(RankingSettings& ranking, const std::string& name, const PlannerOptions& options) {
   ranking.predict_target = options.predictor;
   ranking.tracking_weight = tracking_weight_for(name, options);
-  ranking.moving_reach = options.moving_reach;
+  ranking.moving_reach = moving_reach_for(name, options);
 }
 
 std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {

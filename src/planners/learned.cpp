@@ -73,6 +73,12 @@ double learned_tracking_weight(policy::Variant variant) {
   return variant == policy::Variant::fixed_q ? RankingSettings{}.tracking_weight : 5.0;
 }
 
+double learned_moving_reach(policy::Variant variant, int batch) {
+  // At B = 30 the cvae has samples to spare for the room; at B = 5 (and for bc's few plans) the room cost
+  // sight on the validation episodes.
+  return variant == policy::Variant::cvae && batch >= 30 ? 1.0 : 0.0;
+}
+
 struct LearnedPolicy::Impl {
   LearnedPolicySettings settings;
   policy::Model model;

@@ -331,4 +331,23 @@ else
   fail "run records the tracking weight" "$(tail_of "$tmp/err")"
 fi
 
+
+# The moving reach: unset, the planner's default (1 s for the cvae behind the layer, 0 for the follower),
+# recorded with the value in effect; --moving-reach 0 turns it off.
+run_tool run "$scenario_file" --planner cvae --json "$tmp/episode_reach.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_reach.json" 'd["settings"]["planner"]["moving_reach_s"] == 1' \
+   && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["moving_reach_s"] == 0' \
+   && contains "$tmp/out" "moving reach 1 s"; then
+  pass "run records the moving reach in effect: the cvae's 1 s behind the layer, the follower's 0"
+else
+  fail "run records the moving reach in effect" "$(tail_of "$tmp/err")"
+fi
+run_tool run "$scenario_file" --planner cvae --moving-reach 0 --json "$tmp/episode_no_reach.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_no_reach.json" 'd["settings"]["planner"]["moving_reach_s"] == 0' \
+   && ! contains "$tmp/out" "moving reach"; then
+  pass "run --moving-reach 0 turns the cvae's default off"
+else
+  fail "run --moving-reach 0 turns the cvae's default off" "$(tail_of "$tmp/err")"
+fi
+
 finish

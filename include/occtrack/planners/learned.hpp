@@ -61,6 +61,10 @@ std::string default_model_path(policy::Variant variant);
 /// seeds (docs/learning.md, "The ranking's tracking weight"). LearnedPolicySettings' own default stays the
 /// ranking's, so that a policy built from settings ranks by the spec's cost unless told otherwise.
 double learned_tracking_weight(policy::Variant variant);
+/// The ranking's moving reach (s, RankingSettings::moving_reach) a variant runs with when built by name behind
+/// the safety layer (make_planner, moving_reach_for): 1 for the cvae at a batch of at least 30, else 0 (off).
+/// Measured on the v2 dynamic suites and validation episodes (docs/learning.md, "The moving reach by default").
+double learned_moving_reach(policy::Variant variant, int batch);
 
 class LearnedPolicy final : public Planner {
  public:

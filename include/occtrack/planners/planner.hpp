@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -186,8 +187,8 @@ struct PlannerOptions {
   /// ranking's 1 except for the learned planners (learned_tracking_weight).
   double tracking_weight = 0.0;
   /// s, the ranking's RankingSettings::moving_reach for the planners that rank plans (0: off, the paper's
-  /// ranking; docs/learning.md, "Room for the layer": not a default, it traded sight between suites).
-  double moving_reach = 0.0;
+  /// ranking). Unset: the planner's default (moving_reach_for).
+  std::optional<double> moving_reach;
   /// s, the robot's velocity time constant (Protocol v2's tau; 0: v1). Commands lead the plan by it and by
   /// the latency (command_lead); the safety layer models the robot's lag with it.
   double response_time = 0.0;
@@ -217,6 +218,12 @@ std::vector<std::string> planner_names();
 /// the others; AutoChaser ranks nothing and ignores it). A negative or non-finite weight is returned as it is,
 /// and make_planner then refuses it ("ranking.tracking_weight ...").
 double tracking_weight_for(const std::string& name, const PlannerOptions& options);
+/// The ranking's moving reach (s) the planner `name` gets from make_planner: options.moving_reach when set,
+/// else the planner's default: learned_moving_reach for a learned planner behind the safety layer (the layer
+/// tells the ranking which points moved; SharedPerception::moving), 0 (off) otherwise. Without the layer the
+/// term would go by speed alone, which drifts on static walls (docs/learning.md, "Room for the layer"). A
+/// negative or non-finite value is returned as it is, for make_planner to refuse by name.
+double moving_reach_for(const std::string& name, const PlannerOptions& options);
 /// Builds a planner by name; throws std::invalid_argument listing the known names otherwise.
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options = {});
 
