@@ -1,6 +1,6 @@
 // occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
 //                       [--repeats R] [--scenario FILE] [--seed S] [--shield [--standoff S]] [--predictor]
-//                       [--json FILE]
+//                       [--tracking-weight W] [--moving-reach S] [--json FILE]
 //
 // Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
 // projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
@@ -10,7 +10,8 @@
 // (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle, and by
 // what the layer chose; --standoff sets its moving_standoff (0: the layer before the standoff, to compare side
 // by side). --predictor ranks against the target predictor (its cost: the difference in the cycle against a
-// run without it).
+// run without it). The ranking is the one the variant gets by name (planners::make_planner): its tracking weight
+// and, behind the layer, its moving reach, unless --tracking-weight or --moving-reach say otherwise.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -22,6 +23,7 @@
 
 #include "cli_support.hpp"
 #include "commands.hpp"
+#include "episode_common.hpp"
 #include "occtrack/core/timing.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/follower.hpp"
@@ -51,6 +53,7 @@ struct Options {
   int repeats = 1000;
   double seconds = 5.0;
   std::uint64_t seed = 1;
+  planners::PlannerOptions ranking;  // --tracking-weight, --moving-reach (unset: the variant's by name)
 };
 
 // The given scenario, else the default one from the working directory or from the source tree (the shipped
@@ -115,6 +118,12 @@ int run(const Options& o) {
   settings.seed = o.seed;
   settings.projection.iterations = o.iterations;
   settings.ranking.predict_target = o.predictor;
+  planners::PlannerOptions as_named = o.ranking;  // the ranking make_planner gives the variant by name
+  as_named.batch = o.batch;
+  as_named.shield = o.shield;
+  const std::string name = planners::learned_planner_name(settings.variant);
+  settings.ranking.tracking_weight = planners::tracking_weight_for(name, as_named);
+  settings.ranking.moving_reach = planners::moving_reach_for(name, as_named);
   const std::string scenario_path = resolve_scenario(o.scenario);
   const core::Scenario scenario = io::read_scenario(scenario_path);
 
@@ -186,10 +195,10 @@ int run(const Options& o) {
   const bool projects = settings.variant != policy::Variant::bc;
   const int rows = o.batch + (o.keep_last_plan ? 1 : 0) + (o.rank_stop && projects ? 1 : 0);
   std::printf("policy %s (%s model), batch %d (%d rows ranked%s%s), %d projection iterations, %d obstacle points, "
-              "one core%s\n",
+              "one core%s; ranking's tracking weight %g, moving reach %g s\n",
               policy->name().c_str(), model_name.c_str(), o.batch, rows, o.keep_last_plan ? ", last plan" : "",
               o.rank_stop && projects ? ", stop plan" : "", o.iterations, settings.projection.obstacles,
-              o.predictor ? ", target predictor" : "");
+              o.predictor ? ", target predictor" : "", settings.ranking.tracking_weight, settings.ranking.moving_reach);
   std::printf("  network: PointNet widths ");
   for (std::size_t i = 0; i < net.pointnet_widths.size(); ++i)
     std::printf("%s%d", i ? "-" : "", net.pointnet_widths[i]);
@@ -221,6 +230,8 @@ int run(const Options& o) {
         {"planner", policy->name()},
         {"shield", o.shield},
         {"predictor", o.predictor},
+        {"tracking_weight", settings.ranking.tracking_weight},
+        {"moving_reach_s", settings.ranking.moving_reach},
         {"model", model_name},
         {"batch", o.batch},
         {"rows", rows},
@@ -274,6 +285,7 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
   add_bounded_option(cmd, "--standoff", o->standoff,
                      "With --shield: the layer's moving_standoff, s (0: a stop clear of the lanes only, as before)", 0.0,
                      kStandoffMax);
+  add_ranking_options(cmd, o->ranking);
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
 }
