@@ -36,12 +36,14 @@ struct RankingSettings {
   double near_weight = 2000.0;
   double near_horizon = 1.5;      ///< seconds
   double near_clearance = 0.4;    ///< metres from an obstacle point to the robot centre: the optimizer's disk radius
-  /// Seconds of a moving obstacle point's speed added to near_clearance for that point (0: off, the default).
+  /// Seconds of a moving obstacle point's speed added to near_clearance for that point (0: off, the settings'
+  /// default; make_planner gives the cvae at B >= 30 behind the safety layer 1, planners::moving_reach_for).
   /// The safety layer refuses a command whose stop comes within a moving point's passive-safety reach (any
   /// heading, at its speed), so a plan that keeps only the near term's distance from a sliding wall can be
   /// refused cycle after cycle, and the robot falls back on evasive manoeuvres; this keeps plans farther
-  /// from such points. Measured, it traded sight between suites rather than saving it (docs/learning.md,
-  /// "Room for the layer"), so no planner uses it by default. Only points faster than
+  /// from such points. Going by speed alone it traded sight between suites rather than saving it
+  /// (docs/learning.md, "Room for the layer"); on the layer's verdicts it helps the cvae at B = 30 ("The
+  /// moving reach by default"). Only points faster than
   /// moving_reach_speed_min count, each at most at moving_reach_speed_max (the layer's moving_speed_max).
   /// Behind the safety layer, only the points its motion evidence shows moved count (evaluate()'s `moving`):
   /// perception's velocity estimates drift on static walls, which this term would take for motion.
