@@ -117,13 +117,11 @@ int run(const Options& o) {
   settings.rank_stop = o.rank_stop;
   settings.seed = o.seed;
   settings.projection.iterations = o.iterations;
-  settings.ranking.predict_target = o.predictor;
   planners::PlannerOptions as_named = o.ranking;  // the ranking make_planner gives the variant by name
   as_named.batch = o.batch;
   as_named.shield = o.shield;
-  const std::string name = planners::learned_planner_name(settings.variant);
-  settings.ranking.tracking_weight = planners::tracking_weight_for(name, as_named);
-  settings.ranking.moving_reach = planners::moving_reach_for(name, as_named);
+  as_named.predictor = o.predictor;
+  planners::rank_as_asked(settings.ranking, planners::learned_planner_name(settings.variant), as_named);
   const std::string scenario_path = resolve_scenario(o.scenario);
   const core::Scenario scenario = io::read_scenario(scenario_path);
 

@@ -41,14 +41,13 @@ double moving_reach_for(const std::string& name, const PlannerOptions& options) 
 
 double command_lead(const PlannerOptions& options) { return options.response_time + options.latency; }
 
-namespace {
-
-/// The ranking settings the command line's options set, for every planner that ranks plans.
 void rank_as_asked(RankingSettings& ranking, const std::string& name, const PlannerOptions& options) {
   ranking.predict_target = options.predictor;
   ranking.tracking_weight = tracking_weight_for(name, options);
   ranking.moving_reach = moving_reach_for(name, options);
 }
+
+namespace {
 
 std::unique_ptr<Planner> make_bare_planner(const std::string& name, const PlannerOptions& options) {
   if (name == "projcem" || name == "projcem-expert") {

@@ -224,6 +224,9 @@ double tracking_weight_for(const std::string& name, const PlannerOptions& option
 /// term would go by speed alone, which drifts on static walls (docs/learning.md, "Room for the layer"). A
 /// negative or non-finite value is returned as it is, for make_planner to refuse by name.
 double moving_reach_for(const std::string& name, const PlannerOptions& options);
+/// The ranking settings make_planner gives the planner `name` from `options` (predict_target, tracking_weight_for,
+/// moving_reach_for), for every planner that ranks plans; the rest of `ranking` is left as it is.
+void rank_as_asked(RankingSettings& ranking, const std::string& name, const PlannerOptions& options);
 /// Builds a planner by name; throws std::invalid_argument listing the known names otherwise.
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options = {});
 
