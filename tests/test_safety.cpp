@@ -983,6 +983,21 @@ TEST(ShieldEpisode, GetsOutOfTheWayOfAnOncomingObstacle) {
   EXPECT_GT(safe.metrics.shield.evasive, 0);
 }
 
+/// A 0.6 m box drives at `speed` along a lane `lane` m beside a robot at the origin, then turns by 90 degrees at
+/// the corner nearest the robot, straight at it.
+core::Scenario turning_at_the_robot(double lane, double speed) {
+  core::Scenario s;
+  s.name = "turning";
+  s.duration = 10.0;
+  core::ObstacleSpec mover = box(Vec2(5.0, lane), Vec2(0.6, 0.6));
+  mover.path = {Vec2(5.0, lane), Vec2(0.0, lane), Vec2(0.0, -6.0)};
+  mover.speed = speed;
+  s.obstacles = {mover};
+  s.target = {{0.0, Vec2(-1.5, 0.0)}};
+  s.sensor.beams = 360;
+  return s;
+}
+
 TEST(ShieldEpisode, DodgesAnObstacleThatTurnsOutOfItsLaneAtTheRobot) {
   // A 0.6 m box drives along a lane beside a robot that a careless planner keeps still, then turns by 90
   // degrees at the corner nearest the robot, straight at it (as a cylinder did to AutoChaser in
@@ -993,15 +1008,7 @@ TEST(ShieldEpisode, DodgesAnObstacleThatTurnsOutOfItsLaneAtTheRobot) {
   double closest_with = INFINITY;
   for (int i = 0; i <= 11; ++i) {
     const double lane = 0.7 + 0.05 * i;
-    core::Scenario s;
-    s.name = "turning";
-    s.duration = 10.0;
-    core::ObstacleSpec mover = box(Vec2(5.0, lane), Vec2(0.6, 0.6));
-    mover.path = {Vec2(5.0, lane), Vec2(0.0, lane), Vec2(0.0, -6.0)};
-    mover.speed = 1.0;
-    s.obstacles = {mover};
-    s.target = {{0.0, Vec2(-1.5, 0.0)}};
-    s.sensor.beams = 360;
+    const core::Scenario s = turning_at_the_robot(lane, 1.0);
     planners::safety::Settings lane_only = episode_shield();
     lane_only.moving_standoff = 0.0;
     auto before = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), lane_only);
@@ -1014,6 +1021,29 @@ TEST(ShieldEpisode, DodgesAnObstacleThatTurnsOutOfItsLaneAtTheRobot) {
   }
   EXPECT_GT(contacts_without, 0);
   EXPECT_GT(closest_with, 0.2);
+}
+
+TEST(ShieldEpisode, DodgesAFasterObstacleOnlyWhenItsSpeedIsWithinTheEnvelope) {
+  // The same turn at 1.5 m/s, over lanes 0.7 to 1.8 m. The layer's passive safety and standoff assume moving
+  // obstacles go at most moving_speed_max (1 m/s by default; faster estimates are taken for tracking errors):
+  // beyond it the robot is kept too close, and some lanes end in contact. With the envelope raised to 1.5 m/s
+  // none does (docs/safety.md, "Obstacles faster than the layer assumes").
+  int contacts_default = 0, contacts_raised = 0;
+  double closest_raised = INFINITY;
+  for (int i = 0; i <= 22; ++i) {
+    const core::Scenario s = turning_at_the_robot(0.7 + 0.05 * i, 1.5);
+    auto assumed = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), episode_shield());
+    contacts_default += sim::run_episode(s, *assumed, lagged_episode()).metrics.collisions;
+    planners::safety::Settings raised = episode_shield();
+    raised.moving_speed_max = 1.5;
+    auto enveloped = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), raised);
+    const auto safe = sim::run_episode(s, *enveloped, lagged_episode());
+    contacts_raised += safe.metrics.collisions;
+    closest_raised = std::min(closest_raised, safe.metrics.min_clearance_m);
+  }
+  EXPECT_GT(contacts_default, 0);
+  EXPECT_EQ(contacts_raised, 0);
+  EXPECT_GT(closest_raised, 0.1);
 }
 
 /// One cycle of a shielded planner at rest at the origin with this scan.

@@ -28,6 +28,8 @@ CLI::App* add_command_group(CLI::App& parent, const std::string& name, const std
 /// The largest safety-layer standoff (s) a command takes with --standoff (`run`, `bench suite`, `bench
 /// policy`); the layer itself allows up to its horizon.
 inline constexpr double kStandoffMax = 2.0;
+/// The range of --moving-speed-max (m/s) a command takes; the layer itself takes any speed >= 0.
+inline constexpr double kMovingSpeedMin = 0.1, kMovingSpeedMax = 5.0;
 
 /// An option whose value must lie in [low, high] (CLI11 refuses others before the command runs), with its
 /// default shown in --help.

@@ -284,6 +284,14 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
       ->check(e::validator([](const std::string& t) { return e::check(t, 0.0, kStandoffMax); },
                            "S in [0, " + e::show(kStandoffMax) + "]"))
       ->capture_default_str();
+  cmd->add_option("--moving-speed-max", o.planner_options.moving_speed_max,
+                  "Safety layer: the fastest a moving obstacle is assumed to go, m/s, whichever way it turns; "
+                  "faster estimates are taken for tracking errors. Its guarantees against obstacles that turn or "
+                  "reverse hold up to this speed: raise it where obstacles go faster (people walk at 1.4 m/s; "
+                  "docs/safety.md, \"Obstacles faster than the layer assumes\")")
+      ->check(e::validator([](const std::string& t) { return e::check(t, kMovingSpeedMin, kMovingSpeedMax); },
+                           "V in [" + e::show(kMovingSpeedMin) + ", " + e::show(kMovingSpeedMax) + "]"))
+      ->capture_default_str();
 
   add_protocol_options(cmd, o);
 }

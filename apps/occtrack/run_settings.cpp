@@ -32,6 +32,7 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"accel_max", p.accel_max},
                   {"passive_turn_deg", p.passive_turn},
                   {"standoff_s", p.standoff},
+                  {"moving_speed_max_m_s", p.moving_speed_max},
                   {"model", p.model.empty() ? nlohmann::json(nullptr) : nlohmann::json(p.model)},
                   {"batch", p.batch},
                   {"iterations", p.iterations},

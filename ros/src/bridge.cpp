@@ -2,6 +2,7 @@
 #include "bridge.hpp"
 
 #include <random>
+#include <sstream>
 
 #include "occtrack/core/robot_response.hpp"
 #include "occtrack/io/scenario.hpp"
@@ -21,6 +22,7 @@ TrackerConfig default_tracker_config() {
   c.predictor = o.predictor;
   c.passive_turn = o.passive_turn;
   c.standoff = o.standoff;
+  c.moving_speed_max = o.moving_speed_max;
   c.tracking_weight = o.tracking_weight;
   c.moving_reach = o.moving_reach;
   c.planning_period = o.planning_period;
@@ -47,6 +49,7 @@ planners::TrackerSettings to_settings(const TrackerConfig& c) {
   o.predictor = c.predictor;
   o.passive_turn = c.passive_turn;
   o.standoff = c.standoff;
+  o.moving_speed_max = c.moving_speed_max;
   o.tracking_weight = c.tracking_weight;
   o.moving_reach = c.moving_reach;
   o.planning_period = c.planning_period;
@@ -62,6 +65,15 @@ planners::TrackerSettings to_settings(const TrackerConfig& c) {
   return s;
 }
 }  // namespace
+
+std::string describe_settings(const TrackerConfig& config) {
+  const planners::PlannerOptions o = to_settings(config).options;
+  std::ostringstream s;
+  s << "tracking weight " << planners::tracking_weight_for(config.planner, o) << ", moving reach "
+    << planners::moving_reach_for(config.planner, o) << " s";
+  if (o.shield) s << ", standoff " << o.standoff << " s, moving obstacles up to " << o.moving_speed_max << " m/s";
+  return s.str();
+}
 
 struct TrackerBridge::Impl {
   planners::Tracker tracker;

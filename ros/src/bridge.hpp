@@ -22,6 +22,7 @@ struct TrackerConfig {
   int batch = 0;
   bool shield = false, predictor = false;
   double passive_turn = 0.0, standoff = 0.0;  // the safety layer's assumptions about moving obstacles
+  double moving_speed_max = 0.0;              // m/s, the fastest the safety layer assumes they go
   double tracking_weight = 0.0;         // the ranking's (PlannerOptions: 0 is the planner's default)
   std::optional<double> moving_reach;  // the ranking's (PlannerOptions: unset is the planner's default)
   double planning_period = 0.0, accel_max = 0.0, response_time = 0.0, latency = 0.0;
@@ -30,6 +31,10 @@ struct TrackerConfig {
 };
 /// planners::TrackerSettings' defaults (safety layer on, planner cvae, ...), the parameters' defaults.
 TrackerConfig default_tracker_config();
+/// What the planner of `config` will rank and assume, with each planner's own defaults resolved: the
+/// ranking's tracking weight and moving reach, and (with the layer) its standoff and obstacle speed, e.g.
+/// "tracking weight 5, moving reach 1 s, standoff 0.5 s, moving obstacles up to 1 m/s".
+std::string describe_settings(const TrackerConfig& config);
 
 /// A position and velocity (world frame) measured at `stamp` (s).
 struct Stamped {

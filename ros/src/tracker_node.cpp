@@ -68,8 +68,9 @@ class TrackerNode {
     candidates_pub_ = nh.advertise<visualization_msgs::MarkerArray>("candidates", 1);
     status_pub_ = nh.advertise<std_msgs::String>("status", 1);
     timer_ = nh.createTimer(ros::Duration(config_.planning_period), &TrackerNode::on_timer, this);
-    ROS_INFO("occtrack: planner %s (shield %s) at %.1f Hz; target from %s", config_.planner.c_str(),
-             config_.shield ? "on" : "off", 1.0 / config_.planning_period, target_type.c_str());
+    ROS_INFO("occtrack: planner %s (shield %s) at %.1f Hz; target from %s; %s", config_.planner.c_str(),
+             config_.shield ? "on" : "off", 1.0 / config_.planning_period, target_type.c_str(),
+             describe_settings(config_).c_str());
   }
 
  private:
@@ -82,6 +83,7 @@ class TrackerNode {
     pnh.param("predictor", s.predictor, s.predictor);
     pnh.param("passive_turn", s.passive_turn, s.passive_turn);  // the safety layer refuses bad values by name
     pnh.param("standoff", s.standoff, s.standoff);
+    pnh.param("moving_speed_max", s.moving_speed_max, s.moving_speed_max);
     // The ranking's two options; the ranking refuses bad values by name.
     pnh.param("tracking_weight", s.tracking_weight, s.tracking_weight);
     if (double reach = 0.0; pnh.getParam("moving_reach", reach)) s.moving_reach = reach;

@@ -103,6 +103,7 @@ std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOpti
   s.accel_max = options.accel_max;
   s.moving_turn_max = options.passive_turn;
   s.moving_standoff = options.standoff;
+  s.moving_speed_max = options.moving_speed_max;
   return safety::make_shielded(std::move(planner), s);
 }
 

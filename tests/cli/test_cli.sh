@@ -350,4 +350,20 @@ else
   fail "run --moving-reach 0 turns the cvae's default off" "$(tail_of "$tmp/err")"
 fi
 
+# The layer's obstacle-speed envelope: 1 m/s unless --moving-speed-max raises it, recorded; a value outside
+# its range is refused with the option named.
+run_tool run "$scenario_file" --planner follower --moving-speed-max 1.5 --json "$tmp/episode_fast_movers.json"
+if [ "$rc" -eq 0 ] && json_check "$tmp/episode_fast_movers.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1.5' \
+   && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1'; then
+  pass "run records the layer's moving_speed_max: 1 m/s, or --moving-speed-max's"
+else
+  fail "run records the layer's moving_speed_max" "$(tail_of "$tmp/err")"
+fi
+run_tool run "$scenario_file" --planner follower --moving-speed-max 0
+if [ "$rc" -ne 0 ] && contains "$tmp/err" "--moving-speed-max"; then
+  pass "run refuses --moving-speed-max 0 by name"
+else
+  fail "run refuses --moving-speed-max 0 by name" "rc $rc; $(tail_of "$tmp/err")"
+fi
+
 finish

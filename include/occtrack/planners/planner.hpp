@@ -203,6 +203,7 @@ struct PlannerOptions {
   double accel_max = 2.0;        ///< m/s^2, the robot's acceleration bound, for the safety layer
   double passive_turn = 180.0;   ///< degrees, the safety layer's safety::Settings::moving_turn_max
   double standoff = 0.5;         ///< s, the safety layer's safety::Settings::moving_standoff
+  double moving_speed_max = 1.0; ///< m/s, the safety layer's safety::Settings::moving_speed_max
 };
 
 /// s by which a planner's command leads its plan: a command takes effect `latency` after the scan it was
