@@ -1,6 +1,6 @@
 // occtrack bench policy [--model FILE | --random] [--variant cvae|bc|fixed-q] [--batch B] [--iterations K]
-//                       [--repeats R] [--scenario FILE] [--seed S] [--shield [--standoff S]] [--predictor]
-//                       [--tracking-weight W] [--moving-reach S] [--json FILE]
+//                       [--repeats R] [--scenario FILE] [--seed S] [--shield [--standoff S] [--moving-speed-max V]]
+//                       [--predictor] [--tracking-weight W] [--moving-reach S] [--json FILE]
 //
 // Times the learned policy's whole planning cycle (LearnedPolicy::plan: perception, PointNet, decoder,
 // projection, ranking) on one core, on realistic scans: the follower drives a few seconds of a scenario
@@ -9,7 +9,7 @@
 // that the cost can be measured before a model is trained. --shield puts the safety layer around the policy
 // (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle, and by
 // what the layer chose; --standoff sets its moving_standoff (0: the layer before the standoff, to compare side
-// by side). --predictor ranks against the target predictor (its cost: the difference in the cycle against a
+// by side), --moving-speed-max its moving_speed_max. --predictor ranks against the target predictor (its cost: the difference in the cycle against a
 // run without it). The ranking is the one the variant gets by name (planners::make_planner): its tracking weight
 // and, behind the layer, its moving reach, unless --tracking-weight or --moving-reach say otherwise.
 #include <algorithm>
@@ -49,6 +49,7 @@ struct Options {
   bool shield = false;
   bool predictor = false;
   double standoff = planners::safety::Settings{}.moving_standoff;  // s, the layer's default
+  double moving_speed_max = planners::safety::Settings{}.moving_speed_max;  // m/s, the layer's default
   int iterations = planners::LearnedPolicySettings{}.projection.iterations;  // the planners' default
   int repeats = 1000;
   double seconds = 5.0;
@@ -148,6 +149,7 @@ int run(const Options& o) {
     planners::safety::Settings shield;
     shield.response_time = 0.25;
     shield.moving_standoff = o.standoff;
+    shield.moving_speed_max = o.moving_speed_max;
     runner = planners::safety::make_shielded(std::move(runner), shield);
   }
 
@@ -209,8 +211,9 @@ int run(const Options& o) {
   std::printf("  split (medians): perception %.3f, PointNet %.3f, decoder %.3f, projection %.3f, ranking %.3f ms\n",
               sp.median, sn.median, sd.median, sj.median, sr.median);
   if (o.shield) {
-    std::printf("  safety layer (standoff %.2f s): median %.3f ms, p99 %.3f ms, max %.3f ms of the cycle\n", o.standoff,
-                ss.median, ss.p99, ss.max);
+    std::printf("  safety layer (standoff %.2f s, moving obstacles up to %g m/s): median %.3f ms, p99 %.3f ms, max %.3f "
+                "ms of the cycle\n",
+                o.standoff, o.moving_speed_max, ss.median, ss.p99, ss.max);
     std::printf("  by its choice (cycles: median / max ms):");
     for (int a = 0; a < planners::kSafetyActions; ++a) {
       const std::vector<double>& times = by_action[static_cast<std::size_t>(a)];
@@ -253,6 +256,7 @@ int run(const Options& o) {
     if (o.shield) {
       doc["safety_ms"] = {{"median", ss.median}, {"p99", ss.p99}, {"max", ss.max}};
       doc["standoff_s"] = o.standoff;
+      doc["moving_speed_max_m_s"] = o.moving_speed_max;
     }
     if (!write_text_file("occtrack bench policy", o.json_path, doc.dump(2) + "\n")) return kExitInputError;
   }
@@ -283,6 +287,9 @@ void add_bench_policy_command(CLI::App& bench, int& exit_code) {
   add_bounded_option(cmd, "--standoff", o->standoff,
                      "With --shield: the layer's moving_standoff, s (0: a stop clear of the lanes only, as before)", 0.0,
                      kStandoffMax);
+  add_bounded_option(cmd, "--moving-speed-max", o->moving_speed_max,
+                     "With --shield: the fastest the layer assumes a moving obstacle goes, m/s (its moving_speed_max)",
+                     kMovingSpeedMin, kMovingSpeedMax);
   add_ranking_options(cmd, o->ranking);
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   set_command_body(cmd, exit_code, [o] { return run(*o); });
