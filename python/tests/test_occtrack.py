@@ -110,6 +110,8 @@ def test_settings_are_checked_with_the_command_lines_messages():
         occtrack.Planner("cvae", colour="blue")
     with pytest.raises(ValueError, match="--latency"):
         occtrack.run_episode(FOREST, planner="follower", latency=-3)
+    with pytest.raises(ValueError, match="--moving-speed-max"):
+        occtrack.Planner("follower", moving_speed_max=0)
 
 
 def test_run_episode_gives_the_specs_metrics_and_the_trace():
