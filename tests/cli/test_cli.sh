@@ -353,7 +353,8 @@ fi
 # The layer's obstacle-speed envelope: 1 m/s unless --moving-speed-max raises it, recorded; a value outside
 # its range is refused with the option named.
 run_tool run "$scenario_file" --planner follower --moving-speed-max 1.5 --json "$tmp/episode_fast_movers.json"
-if [ "$rc" -eq 0 ] && json_check "$tmp/episode_fast_movers.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1.5' \
+if [ "$rc" -eq 0 ] \
+   && json_check "$tmp/episode_fast_movers.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1.5' \
    && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1'; then
   pass "run records the layer's moving_speed_max: 1 m/s, or --moving-speed-max's"
 else
