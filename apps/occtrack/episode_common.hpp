@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -296,14 +297,44 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   add_protocol_options(cmd, o);
 }
 
+/// Warns on standard error when the safety layer is on and some of `scenarios` have moving obstacles faster
+/// than it assumes (--moving-speed-max): its guarantees against obstacles that turn or reverse do not cover
+/// them. Said once per run, with the fastest obstacle and where it is.
+inline void warn_beyond_the_layers_envelope(const EpisodeCliOptions& o, const std::vector<core::Scenario>& scenarios) {
+  const planners::PlannerOptions& p = o.planner_options;
+  if (!p.shield) return;
+  int beyond = 0;
+  double fastest = 0.0;
+  std::string where;
+  for (const core::Scenario& s : scenarios) {
+    double f = 0.0;
+    for (const core::ObstacleSpec& obstacle : s.obstacles)
+      if (obstacle.moving()) f = std::max(f, obstacle.speed);
+    if (!(f > p.moving_speed_max)) continue;
+    ++beyond;
+    if (f > fastest) {
+      fastest = f;
+      where = s.name;
+    }
+  }
+  if (beyond == 0) return;
+  std::fprintf(stderr,
+               "warning: %d scenario%s with moving obstacles faster than the safety layer assumes (%g m/s in %s; "
+               "--moving-speed-max %g): its guarantees against obstacles that turn or reverse do not cover them "
+               "(docs/safety.md, \"Obstacles faster than the layer assumes\")\n",
+               beyond, beyond == 1 ? "" : "s", fastest, where.c_str(), p.moving_speed_max);
+}
+
 /// The episode settings of `o`, with `--latency auto` resolved: the planner that `make` builds (by default
 /// the one the options name) is timed once on scans replayed from `scenarios` (sim::median_cycle_ms), the
 /// median is multiplied by --compute-scale, the result is printed on standard error and held fixed for the
 /// whole run. Without `auto` this is o.settings() and nothing is measured. Throws std::invalid_argument naming
-/// the option for a bad value.
+/// the option for a bad value. Every front end that runs episodes comes through here, so the envelope's
+/// warning (above) is given here too.
 inline sim::EpisodeSettings resolve_episode_settings(
     const EpisodeCliOptions& o, const std::vector<core::Scenario>& scenarios,
     const std::function<std::unique_ptr<planners::Planner>()>& make = {}) {
+  warn_beyond_the_layers_envelope(o, scenarios);
   if (!o.latency_auto()) return o.settings();
   EpisodeCliOptions fixed = o;
   fixed.latency = "0";

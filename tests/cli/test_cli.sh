@@ -360,6 +360,18 @@ if [ "$rc" -eq 0 ] \
 else
   fail "run records the layer's moving_speed_max" "$(tail_of "$tmp/err")"
 fi
+if ! contains "$tmp/err" "faster than the safety layer assumes"; then
+  pass "run gives no envelope warning when the scenario's obstacles (0.7 m/s) are within it"
+else
+  fail "run gives no envelope warning within it" "$(tail_of "$tmp/err")"
+fi
+run_tool run "$scenario_file" --planner follower --moving-speed-max 0.5
+envelope_warning="warning: 1 scenario with moving obstacles faster than the safety layer assumes (0.7 m/s"
+if [ "$rc" -eq 0 ] && contains "$tmp/err" "$envelope_warning"; then
+  pass "run warns when the scenario's obstacles are faster than --moving-speed-max"
+else
+  fail "run warns when the scenario's obstacles are faster than --moving-speed-max" "rc $rc; $(tail_of "$tmp/err")"
+fi
 run_tool run "$scenario_file" --planner follower --moving-speed-max 0
 if [ "$rc" -ne 0 ] && contains "$tmp/err" "--moving-speed-max"; then
   pass "run refuses --moving-speed-max 0 by name"
