@@ -1168,6 +1168,29 @@ TEST(ShieldEpisode, FactoryPlannersStopShortOfTheGap) {
   }
 }
 
+TEST(ShieldEpisode, FactoryGivesTheLayerItsAssumptionsAboutMovingObstacles) {
+  // PlannerOptions' defaults are the layer's own, and make_planner hands each one over: a follower beside the
+  // lane of a 1.5 m/s box that turns at it runs differently with the envelope raised to 1.5 m/s.
+  const planners::PlannerOptions defaults;
+  const planners::safety::Settings layer;
+  EXPECT_EQ(defaults.passive_turn, layer.moving_turn_max);
+  EXPECT_EQ(defaults.standoff, layer.moving_standoff);
+  EXPECT_EQ(defaults.moving_speed_max, layer.moving_speed_max);
+  EXPECT_EQ(defaults.accel_max, layer.accel_max);
+  const core::Scenario scenario = turning_at_the_robot(1.1, 1.5);
+  core::EpisodeMetrics runs[2];
+  for (int raised = 0; raised < 2; ++raised) {
+    planners::PlannerOptions options;
+    options.shield = true;
+    options.response_time = 0.25;
+    if (raised == 1) options.moving_speed_max = 1.5;
+    auto planner = planners::make_planner("follower", options);
+    runs[raised] = sim::run_episode(scenario, *planner, lagged_episode()).metrics;
+  }
+  EXPECT_NE(runs[0].min_clearance_m, runs[1].min_clearance_m);
+  EXPECT_NE(runs[0].shield.evasive, runs[1].shield.evasive);
+}
+
 TEST(ShieldEpisode, ShippedCvaeWithThePredictorKeepsClearOfSlidingWalls) {
   // The whole run-time stack a robot runs, through the library alone: the shipped cvae model, the target
   // predictor and the safety layer, among walls that slide, with Protocol v2's lag, latency and a target seen

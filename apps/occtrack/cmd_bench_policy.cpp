@@ -10,8 +10,9 @@
 // (docs/safety.md; response time 0.25 s, the v2 tables' lag) and splits out its share of the cycle, and by
 // what the layer chose; --standoff sets its moving_standoff (0: the layer before the standoff, to compare side
 // by side), --moving-speed-max its moving_speed_max. --predictor ranks against the target predictor (its
-// cost: the difference in the cycle against a run without it). The ranking is the one the variant gets by name (planners::make_planner): its tracking weight
-// and, behind the layer, its moving reach, unless --tracking-weight or --moving-reach say otherwise.
+// cost: the difference in the cycle against a run without it). The ranking is the one the variant gets by
+// name (planners::make_planner): its tracking weight and, behind the layer, its moving reach, unless
+// --tracking-weight or --moving-reach say otherwise.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>

@@ -300,7 +300,8 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
 /// Warns on standard error when the safety layer is on and some of `scenarios` have moving obstacles faster
 /// than it assumes (--moving-speed-max): its guarantees against obstacles that turn or reverse do not cover
 /// them. Said once per run, with the fastest obstacle and where it is.
-inline void warn_beyond_the_layers_envelope(const EpisodeCliOptions& o, const std::vector<core::Scenario>& scenarios) {
+inline void warn_beyond_the_layers_envelope(const EpisodeCliOptions& o,
+                                            const std::vector<core::Scenario>& scenarios) {
   const planners::PlannerOptions& p = o.planner_options;
   if (!p.shield) return;
   int beyond = 0;
