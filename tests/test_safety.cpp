@@ -1191,6 +1191,73 @@ TEST(ShieldEpisode, FactoryGivesTheLayerItsAssumptionsAboutMovingObstacles) {
   EXPECT_NE(runs[0].shield.evasive, runs[1].shield.evasive);
 }
 
+TEST(SpeedWatch, SaysNothingUntilItHasFiftyEstimates) {
+  planners::safety::SpeedWatch watch;
+  for (int i = 0; i < 49; ++i) watch.add(0.05 * i, 3.0);
+  EXPECT_TRUE(std::isnan(watch.quantile()));
+  EXPECT_FALSE(watch.beyond(1.0));
+  watch.add(2.45, 3.0);
+  EXPECT_NEAR(watch.quantile(), 3.05, 1e-9);  // the upper edge of the 0.05 m/s bin holding 3.0
+  EXPECT_TRUE(watch.beyond(1.0));
+  EXPECT_FALSE(watch.beyond(3.0));
+}
+
+TEST(SpeedWatch, TakesTheSeventyFifthPercentileOfTheLastTenSeconds) {
+  planners::safety::SpeedWatch watch;
+  // 60 estimates at 1.01 m/s then 40 at 2.01: the 75th percentile (rank 74 of 100) is among the fast ones.
+  for (int i = 0; i < 60; ++i) watch.add(0.01 * i, 1.01);
+  EXPECT_NEAR(watch.quantile(), 1.05, 1e-9);
+  EXPECT_FALSE(watch.beyond(1.0));  // 1.05 is within 1.3 times the envelope
+  EXPECT_TRUE(watch.beyond(0.8));   // and beyond 1.3 times 0.8
+  for (int i = 0; i < 40; ++i) watch.add(1.0 + 0.01 * i, 2.01);
+  EXPECT_NEAR(watch.quantile(), 2.05, 1e-9);
+  EXPECT_TRUE(watch.beyond(1.0));
+  // Non-finite and negative estimates are not counted.
+  watch.add(1.5, NAN);
+  watch.add(1.5, -1.0);
+  watch.add(NAN, 1.0);
+  // Ten seconds after the slow ones the 40 fast ones are left: fewer than 50, nothing said.
+  watch.expire(10.0 + 0.595);
+  EXPECT_TRUE(std::isnan(watch.quantile()));
+  watch.reset();
+  for (int i = 0; i < 50; ++i) watch.add(20.0, 0.5);
+  EXPECT_NEAR(watch.quantile(), 0.55, 1e-9);
+}
+
+TEST(SpeedWatch, KeepsItsCapacityAndCountsAnythingFasterInItsLastBin) {
+  planners::safety::SpeedWatch watch;
+  const std::size_t n = planners::safety::SpeedWatch::kCapacity + 100;
+  for (std::size_t i = 0; i < n; ++i) watch.add(0.0, i < 100 ? 0.2 : 50.0);  // the slow ones go first
+  EXPECT_NEAR(watch.quantile(), planners::safety::SpeedWatch::kBins * planners::safety::SpeedWatch::kBin, 1e-9);
+}
+
+TEST(ShieldEpisode, SaysWhenMovingObstaclesLookFasterThanItAssumes) {
+  // A 0.6 m box goes back and forth at `speed` on a 4 m lane 2 m from a still robot, for 20 s. The layer's
+  // estimates show it faster than its 1 m/s envelope at 1.5 m/s, not at 1 m/s, nor at 1.5 m/s with the
+  // envelope raised to it (PlannerOutput::beyond_envelope, counted in the metrics).
+  const auto cycles_beyond = [](double speed, double envelope) {
+    core::Scenario s;
+    s.name = "lane";
+    s.duration = 20.0;
+    core::ObstacleSpec mover = box(Vec2(-2.0, 2.0), Vec2(0.6, 0.6));
+    mover.path = {Vec2(-2.0, 2.0), Vec2(2.0, 2.0)};
+    mover.speed = speed;
+    s.obstacles = {mover};
+    s.target = {{0.0, Vec2(-1.5, 0.0)}};
+    s.sensor.beams = 360;
+    planners::safety::Settings settings = episode_shield();
+    settings.moving_speed_max = envelope;
+    auto shielded = planners::safety::make_shielded(std::make_unique<Constant>(Vec2::Zero()), settings);
+    const auto result = sim::run_episode(s, *shielded, lagged_episode());
+    EXPECT_EQ(result.metrics.collisions, 0);
+    return result.metrics.beyond_envelope_cycles;
+  };
+  const int fast = cycles_beyond(1.5, 1.0);
+  EXPECT_GT(fast, 200) << "of 400 cycles";
+  EXPECT_EQ(cycles_beyond(1.0, 1.0), 0);
+  EXPECT_EQ(cycles_beyond(1.5, 1.5), 0);
+}
+
 TEST(ShieldEpisode, ShippedCvaeWithThePredictorKeepsClearOfSlidingWalls) {
   // The whole run-time stack a robot runs, through the library alone: the shipped cvae model, the target
   // predictor and the safety layer, among walls that slide, with Protocol v2's lag, latency and a target seen

@@ -37,6 +37,7 @@ int run(const SuiteOptions& o) {
   std::cout << run_settings_line(run.planner, run.planner_options, run.settings) << "\n";
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
+  warn_seen_beyond_the_envelope(result.summary, run.planner_options);
   if (!o.json_path.empty() &&
       !write_text_file("occtrack bench suite", o.json_path,
                        results_with_settings(io::suite_json(result), "bench suite", run.planner, run.planner_options,

@@ -57,6 +57,7 @@ int run(const RunOptions& o) {
               "%.1f s\n",
               m.tracking_distance_mean_m, 100.0 * m.tracking_in_band_share, settings.band.min, settings.band.max,
               m.target_out_of_range_s);
+  warn_seen_beyond_the_envelope(m, options);
   bool ok = true;
   if (!o.json_path.empty())
     ok = write_text_file(kWho, o.json_path,

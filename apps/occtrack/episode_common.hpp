@@ -326,6 +326,18 @@ inline void warn_beyond_the_layers_envelope(const EpisodeCliOptions& o,
                beyond, beyond == 1 ? "" : "s", fastest, where.c_str(), p.moving_speed_max);
 }
 
+/// Warns on standard error when the safety layer saw, from its own estimates, moving obstacles faster than it
+/// assumes in some cycles of `m` (an episode, or a suite's summary): without a scenario file's word for it,
+/// as on a robot (planners::safety::SpeedWatch).
+inline void warn_seen_beyond_the_envelope(const core::EpisodeMetrics& m, const planners::PlannerOptions& p) {
+  if (m.beyond_envelope_cycles == 0) return;
+  std::fprintf(stderr,
+               "warning: in %d of %d cycles the safety layer's estimates showed moving obstacles faster than it "
+               "assumes (--moving-speed-max %g); if they are, raise it (docs/safety.md, \"Obstacles faster than the "
+               "layer assumes\")\n",
+               m.beyond_envelope_cycles, m.cycles, p.moving_speed_max);
+}
+
 /// The episode settings of `o`, with `--latency auto` resolved: the planner that `make` builds (by default
 /// the one the options name) is timed once on scans replayed from `scenarios` (sim::median_cycle_ms), the
 /// median is multiplied by --compute-scale, the result is printed on standard error and held fixed for the

@@ -94,6 +94,7 @@ const TrackerStep& TrackerBridge::step(double now, const Stamped& robot, const S
   r.reason = &out.reason;
   r.plan = &out.planner.plan;
   r.candidates = &out.planner.candidates;
+  r.beyond_envelope = out.planner.beyond_envelope;
   return r;
 }
 

@@ -50,6 +50,8 @@ struct TrackerStep {
   const std::string* reason = nullptr;                       ///< empty while tracking
   const std::vector<Vec2>* plan = nullptr;                   ///< world frame
   const std::vector<std::vector<Vec2>>* candidates = nullptr;
+  /// The safety layer's estimates show moving obstacles faster than it assumes (~moving_speed_max).
+  bool beyond_envelope = false;
 };
 
 /// planners::Tracker (see its header for the rules).

@@ -144,6 +144,11 @@ class TrackerNode {
       if (scan_msg_) to_scan(*scan_msg_, yaw, scan_);  // the laser is aligned with the body: add the yaw
       const TrackerStep& out = tracker_.step(now.toSec(), robot, *target_, scan_msg_ ? &scan_ : nullptr);
       reason = *out.reason;
+      if (out.beyond_envelope)
+        ROS_WARN_THROTTLE(10.0,
+                          "occtrack: moving obstacles look faster than the safety layer assumes (~moving_speed_max "
+                          "%g m/s); if they are, raise it (docs/safety.md)",
+                          config_.moving_speed_max);
       twist = to_twist(out.command, yaw);  // zero when stopped (and for a non-finite yaw, already refused)
       publish_plan(out, now);
     }

@@ -47,6 +47,8 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
                    {"evasive", m.shield.evasive},
                    {"best_effort", m.shield.best_effort},
                    {"brake", m.shield.brake}};
+  // ... and how many of those cycles it saw moving obstacles faster than it assumes.
+  if (m.shield.total() > 0) j["beyond_envelope_cycles"] = m.beyond_envelope_cycles;
   return j;
 }
 

@@ -93,6 +93,7 @@ struct Tracker::Impl {
     out.planner.ok = false;
     out.planner.message.clear();
     out.planner.safety = SafetyAction::off;
+    out.planner.beyond_envelope = false;
     out.planner.compute_ms = 0.0;
   }
 

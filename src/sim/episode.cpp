@@ -193,7 +193,7 @@ EpisodeResult run_episode(const core::Scenario& scenario, planners::Planner& pla
       Vec2 next = out.command_velocity;
       const bool failed = !out.ok || !next.allFinite();
       metrics.add_cycle(out.compute_ms, failed);
-      metrics.add_safety(out.safety);
+      metrics.add_safety(out.safety, out.beyond_envelope);
       if (failed) next = Vec2::Zero();  // brake: never pass a non-finite command on
       if (settings.latency_ms) {
         // Protocol v2: the command applies L after the scan; the next cycle starts at the first planning

@@ -50,7 +50,8 @@ void EpisodeMetricsAccumulator::add_cycle(double compute_ms, bool failed) {
   if (failed) ++m_.planner_failures;
 }
 
-void EpisodeMetricsAccumulator::add_safety(planners::SafetyAction action) {
+void EpisodeMetricsAccumulator::add_safety(planners::SafetyAction action, bool beyond_envelope) {
+  if (beyond_envelope) ++m_.beyond_envelope_cycles;
   using planners::SafetyAction;
   switch (action) {
     case SafetyAction::off: break;
@@ -122,6 +123,7 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
     s.shield.evasive += e.shield.evasive;
     s.shield.best_effort += e.shield.best_effort;
     s.shield.brake += e.shield.brake;
+    s.beyond_envelope_cycles += e.beyond_envelope_cycles;
     s.cycles += e.cycles;
     s.occlusion_stretches += e.occlusion_stretches;
     s.longest_occlusion_s = std::max(s.longest_occlusion_s, e.longest_occlusion_s);

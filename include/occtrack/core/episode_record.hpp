@@ -46,6 +46,9 @@ struct EpisodeMetrics {
   int occlusion_stretches = 0;
   double longest_occlusion_s = 0;
   ShieldCounts shield;  ///< issue 11's safety layer; written to the JSON only when it ran
+  /// Cycles in which the safety layer saw moving obstacles faster than it assumes (its moving_speed_max;
+  /// planners::safety::SpeedWatch); written with `shield`.
+  int beyond_envelope_cycles = 0;
 };
 
 /// A suite's episodes and their summary (sim::summarize_suite makes it, io/results.hpp writes it).

@@ -92,6 +92,9 @@ struct PlannerOutput {
   /// layer to fall back on; planners that do not rank leave it empty.
   std::vector<Vec2> ranked_commands;
   SafetyAction safety = SafetyAction::off;
+  /// Set by the safety layer: moving obstacles look faster than it assumes (safety::SpeedWatch), so its
+  /// guarantees against obstacles that turn or reverse may not hold; raise its moving_speed_max if they are.
+  bool beyond_envelope = false;
   /// Storage of candidates dropped by resize_candidates, taken back when the count grows again (not output).
   std::vector<std::vector<Vec2>> spare_candidates;
 

@@ -307,6 +307,44 @@ class MotionEvidence {
   int earlier_[2] = {-1, -1};  // of the current scan: older_than(baselines[b]), a slot of history_ (-1: none)
 };
 
+/// Whether moving obstacles look faster than the layer assumes (Settings::moving_speed_max), from the layer's
+/// own estimates: the 75th percentile of the speeds of objects the LiDAR's evidence shows moved, over the last
+/// 10 s, once it holds at least 50 of them, above 1.3 times the envelope. Perception's estimates run above the
+/// true speeds (tracking mismatches), hence the margin: measured, at most 1.16 m/s on the suites within the
+/// 1 m/s envelope and at least 1.51 m/s in every episode with 1.5 m/s obstacles (docs/safety.md, "Obstacles
+/// faster than the layer assumes"). A warning only: nothing the layer certifies depends on it. Allocates only
+/// when constructed.
+class SpeedWatch {
+ public:
+  static constexpr double kWindow = 10.0;    ///< s
+  static constexpr double kQuantile = 0.75;
+  static constexpr double kRatio = 1.3;      ///< of the envelope
+  static constexpr int kLeast = 50;          ///< estimates in the window before it says anything
+  static constexpr double kBin = 0.05;       ///< m/s
+  static constexpr int kBins = 200;          ///< to 10 m/s; faster estimates count in the last bin
+  static constexpr std::size_t kCapacity = 8192;  ///< estimates kept; beyond, the oldest go early
+
+  SpeedWatch();
+  void reset();
+  /// One object's estimated speed (m/s) at `time` (s, not decreasing from call to call); non-finite ignored.
+  void add(double time, double speed);
+  /// Forgets the estimates older than kWindow before `now`.
+  void expire(double now);
+  /// The kQuantile-th of the estimates kept (the upper edge of its bin), NaN with fewer than kLeast.
+  double quantile() const;
+  /// True when quantile() exceeds kRatio times `envelope` (m/s).
+  bool beyond(double envelope) const;
+
+ private:
+  struct Entry {
+    double time;
+    int bin;
+  };
+  std::vector<Entry> ring_;  // kCapacity slots; [first_, first_ + size_) modulo kCapacity
+  std::size_t first_ = 0, size_ = 0;
+  std::vector<int> counts_;  // per bin
+};
+
 /// Wraps `inner` with the safety layer. The wrapper keeps the inner planner's name; its use_prior() takes the
 /// robot's radius from the scenario. Throws std::invalid_argument on invalid settings.
 std::unique_ptr<Planner> make_shielded(std::unique_ptr<Planner> inner, const Settings& settings);

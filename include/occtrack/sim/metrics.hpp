@@ -28,8 +28,9 @@ class EpisodeMetricsAccumulator {
   void add_state(double clearance, bool occluded, double distance, bool last);
   /// One planning cycle: its computation time, and whether the planner gave no usable command.
   void add_cycle(double compute_ms, bool failed);
-  /// What the safety layer did with the cycle's command (nothing counted for SafetyAction::off).
-  void add_safety(planners::SafetyAction action);
+  /// What the safety layer did with the cycle's command (nothing counted for SafetyAction::off), and whether
+  /// it saw moving obstacles faster than it assumes (PlannerOutput::beyond_envelope).
+  void add_safety(planners::SafetyAction action, bool beyond_envelope = false);
   /// The norm of the robot's realised acceleration over one physics step (m/s^2).
   void add_acceleration(double norm);
 

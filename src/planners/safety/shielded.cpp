@@ -56,6 +56,7 @@ class Shielded final : public Planner {
     has_previous_ = false;
     evasive_left_ = 0.0;
     fastest_moving_ = 0.0;
+    speeds_.reset();
     memory_.clear();
     evidence_.reset();
   }
@@ -92,6 +93,8 @@ class Shielded final : public Planner {
     inner_->plan(passed, out);
     const auto resume = Clock::now();
     choose(input, out);
+    speeds_.expire(input.time);
+    out.beyond_envelope = speeds_.beyond(certifier_.settings().moving_speed_max);
     out.compute_ms += ms(start, added) + (shared_.used ? 0.0 : shared_.ms) + ms(perceived, classified) +
                       ms(resume, Clock::now());
   }
@@ -141,7 +144,10 @@ class Shielded final : public Planner {
           continue;
         const Eigen::Vector2d velocity = moving_[first].velocity;
         fastest_moving_ = std::max(fastest_moving_, velocity.norm());
-        if (verdict == MotionEvidence::Verdict::moved) moving_velocities_.push_back(velocity);
+        if (verdict == MotionEvidence::Verdict::moved) {
+          moving_velocities_.push_back(velocity);
+          speeds_.add(input.time, velocity.norm());
+        }
         for (std::size_t i = first; i < last; ++i) {
           memorize(fresh, input.robot_position + moving_[i].position, velocity, input.time,
                    verdict != MotionEvidence::Verdict::still);
@@ -420,6 +426,7 @@ class Shielded final : public Planner {
   Eigen::Vector2d evasive_ = Eigen::Vector2d::Zero();  // the evasive manoeuvre under way
   double evasive_left_ = 0.0;                           // s it still holds its command
   double fastest_moving_ = 0.0;  // m/s, the fastest a moving point has been estimated this episode
+  SpeedWatch speeds_;            // whether moving points look faster than the envelope (a warning only)
   struct Seen {  // a moving object seen lately: the bounding box of its points (world), its velocity, when
     Eigen::Vector2d lo, hi, velocity;
     double time = 0.0;
