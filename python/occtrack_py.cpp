@@ -238,6 +238,7 @@ class PyPlanner {
     result["ok"] = out_.ok;
     result["message"] = out_.message;
     result["safety"] = std::string(planners::to_string(out_.safety));
+    result["beyond_envelope"] = out_.beyond_envelope;
     result["compute_ms"] = out_.compute_ms;
     return result;
   }
@@ -350,7 +351,9 @@ PYBIND11_MODULE(_occtrack, m) {
            "One planning cycle. Positions and velocities in the world frame; the scan's angles in the world "
            "frame's orientation: `angles` (one per beam, evenly spaced), or angle_min and angle_increment (which "
            "defaults to 360 degrees over the beams); inf: no return. "
-           "Returns {command, plan (N, 2), candidates (M, N, 2), ok, message, safety, compute_ms}.");
+           "Returns {command, plan (N, 2), candidates (M, N, 2), ok, message, safety, beyond_envelope, compute_ms}; "
+           "beyond_envelope: the safety layer's estimates show moving obstacles faster than its moving_speed_max "
+           "(if they are, raise it).");
 
   py::class_<core::Scenario>(m, "Scenario", "A scenario (occtrack.scenario.v1)")
       .def_readonly("name", &core::Scenario::name)

@@ -59,6 +59,7 @@ def test_the_cvae_returns_its_candidates_as_one_array():
     candidates = out["candidates"]
     assert candidates.ndim == 3 and candidates.shape[2] == 2 and candidates.shape[0] >= 1
     assert out["safety"] in ("plan", "alternative", "stop", "evasive", "best_effort", "brake")
+    assert out["beyond_envelope"] is False  # nothing moves in this scan
 
 
 def test_the_shield_stops_short_of_a_wall_between_robot_and_target():
