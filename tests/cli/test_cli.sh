@@ -355,7 +355,8 @@ fi
 run_tool run "$scenario_file" --planner follower --moving-speed-max 1.5 --json "$tmp/episode_fast_movers.json"
 if [ "$rc" -eq 0 ] \
    && json_check "$tmp/episode_fast_movers.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1.5' \
-   && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1'; then
+   && json_check "$tmp/episode_shielded.json" 'd["settings"]["planner"]["moving_speed_max_m_s"] == 1' \
+   && contains "$tmp/out" "standoff 0.5 s, moving obstacles up to 1.5 m/s"; then
   pass "run records the layer's moving_speed_max: 1 m/s, or --moving-speed-max's"
 else
   fail "run records the layer's moving_speed_max" "$(tail_of "$tmp/err")"
