@@ -74,10 +74,7 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
                               const sim::EpisodeSettings& e) {
   std::ostringstream s;
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
-    << ", predictor " << (p.predictor ? "on" : "off")
-    << ", tracking weight " << planners::tracking_weight_for(planner, p);
-  if (const double reach = planners::moving_reach_for(planner, p); reach > 0.0) s << ", moving reach " << reach << " s";
-  if (p.shield) s << ", standoff " << p.standoff << " s, moving obstacles up to " << p.moving_speed_max << " m/s";
+    << ", predictor " << (p.predictor ? "on" : "off") << ", " << planners::describe_ranking_and_layer(planner, p);
   s << ", latency ";
   if (e.latency_ms)
     s << *e.latency_ms << " ms";

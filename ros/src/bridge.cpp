@@ -2,7 +2,6 @@
 #include "bridge.hpp"
 
 #include <random>
-#include <sstream>
 
 #include "occtrack/core/robot_response.hpp"
 #include "occtrack/io/scenario.hpp"
@@ -67,12 +66,7 @@ planners::TrackerSettings to_settings(const TrackerConfig& c) {
 }  // namespace
 
 std::string describe_settings(const TrackerConfig& config) {
-  const planners::PlannerOptions o = to_settings(config).options;
-  std::ostringstream s;
-  s << "tracking weight " << planners::tracking_weight_for(config.planner, o) << ", moving reach "
-    << planners::moving_reach_for(config.planner, o) << " s";
-  if (o.shield) s << ", standoff " << o.standoff << " s, moving obstacles up to " << o.moving_speed_max << " m/s";
-  return s.str();
+  return planners::describe_ranking_and_layer(config.planner, to_settings(config).options);
 }
 
 struct TrackerBridge::Impl {

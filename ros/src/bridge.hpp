@@ -31,9 +31,9 @@ struct TrackerConfig {
 };
 /// planners::TrackerSettings' defaults (safety layer on, planner cvae, ...), the parameters' defaults.
 TrackerConfig default_tracker_config();
-/// What the planner of `config` will rank and assume, with each planner's own defaults resolved: the
-/// ranking's tracking weight and moving reach, and (with the layer) its standoff and obstacle speed, e.g.
-/// "tracking weight 5, moving reach 1 s, standoff 0.5 s, moving obstacles up to 1 m/s".
+/// What the planner of `config` will rank and assume, with each planner's own defaults resolved
+/// (planners::describe_ranking_and_layer), e.g. "tracking weight 5, moving reach 1 s, standoff 0.5 s, moving
+/// obstacles up to 1 m/s".
 std::string describe_settings(const TrackerConfig& config);
 
 /// A position and velocity (world frame) measured at `stamp` (s).

@@ -40,15 +40,16 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
   j["occlusion_stretches"] = m.occlusion_stretches;
   j["longest_occlusion_s"] = m.longest_occlusion_s;
   // Issue 11's safety layer: cycles by what it did; absent without it, so that runs without it are unchanged.
-  if (m.shield.total() > 0)
+  // With it, also how many cycles it saw moving obstacles faster than it assumes.
+  if (m.shield.total() > 0) {
     j["shield"] = {{"plan", m.shield.plan},
                    {"alternative", m.shield.alternative},
                    {"stop", m.shield.stop},
                    {"evasive", m.shield.evasive},
                    {"best_effort", m.shield.best_effort},
                    {"brake", m.shield.brake}};
-  // ... and how many of those cycles it saw moving obstacles faster than it assumes.
-  if (m.shield.total() > 0) j["beyond_envelope_cycles"] = m.beyond_envelope_cycles;
+    j["beyond_envelope_cycles"] = m.beyond_envelope_cycles;
+  }
   return j;
 }
 

@@ -1,4 +1,5 @@
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include "occtrack/planners/autochaser.hpp"
@@ -37,6 +38,15 @@ double moving_reach_for(const std::string& name, const PlannerOptions& options) 
   if (!options.shield) return 0.0;
   if (const auto variant = learned_variant(name)) return learned_moving_reach(*variant, options.batch);
   return 0.0;
+}
+
+std::string describe_ranking_and_layer(const std::string& name, const PlannerOptions& options) {
+  std::ostringstream s;
+  s << "tracking weight " << tracking_weight_for(name, options);
+  if (const double reach = moving_reach_for(name, options); reach > 0.0) s << ", moving reach " << reach << " s";
+  if (options.shield)
+    s << ", standoff " << options.standoff << " s, moving obstacles up to " << options.moving_speed_max << " m/s";
+  return s.str();
 }
 
 double command_lead(const PlannerOptions& options) { return options.response_time + options.latency; }

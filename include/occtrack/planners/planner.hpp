@@ -231,6 +231,10 @@ double moving_reach_for(const std::string& name, const PlannerOptions& options);
 /// The ranking settings make_planner gives the planner `name` from `options` (predict_target, tracking_weight_for,
 /// moving_reach_for), for every planner that ranks plans; the rest of `ranking` is left as it is.
 void rank_as_asked(RankingSettings& ranking, const std::string& name, const PlannerOptions& options);
+/// What the planner `name` ranks and assumes with `options`, each planner's own default resolved, for a
+/// settings line: "tracking weight W", then ", moving reach S s" when it is on, then (with the safety layer)
+/// ", standoff X s, moving obstacles up to V m/s". The command line's settings line and the ROS node print it.
+std::string describe_ranking_and_layer(const std::string& name, const PlannerOptions& options);
 /// Builds a planner by name; throws std::invalid_argument listing the known names otherwise.
 std::unique_ptr<Planner> make_planner(const std::string& name, const PlannerOptions& options = {});
 
