@@ -3,21 +3,32 @@
 //                            [--obstacles N] [--moving-obstacles N]
 // occtrack scenario generate --paper-world six-wall|six-wall-sliding|random --out FILE [--seed S]
 //                            [--target-speed V] [--duration D]
+// occtrack scenario import RECORDING --world six-wall|six-wall-sliding|random|WORLD.yaml --out FILE
+//                          [--columns T,X,Y] [--time-scale S] [--from T] [--to T] [--period DT]
+//                          [--robot-start=X,Y] [--name NAME]
 //
 // Writes the benchmark suites of shared/spec/simulation.md as scenario files (DIR/<suite>/<world>-<k>.yaml),
 // or one scenario of a freshly generated world. Each file written gets one line: its obstacles, the target's
 // path, and how long a robot on a 2 m leash would lose sight of the target (a measure of the occlusion the
 // scenario holds). Seeds 1000-1999 are the benchmark's (scenarios/README.md); training uses other seeds.
+// `import` makes one scenario of a recorded target path in a paper's world or a scenario file's world
+// (scenarios/README.md, "Your own recorded target paths").
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <string_view>
+#include <system_error>
 
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "occtrack/io/scenario.hpp"
+#include "occtrack/io/target_path.hpp"
 #include "occtrack/sim/paper_worlds.hpp"
+#include "occtrack/sim/recorded_path.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
 namespace occtrack::app {
@@ -181,6 +192,101 @@ int run_paper_world(const Options& o) {
   return kExitOk;
 }
 
+struct ImportOptions {
+  std::string recording;
+  std::string world;
+  std::string out;
+  std::string columns = "0,1,2";
+  double time_scale = 1.0;
+  std::optional<double> from, to;
+  double period = 0.1;
+  std::string robot_start;
+  std::string name;
+};
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    parts.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) return parts;
+    start = comma + 1;
+  }
+}
+
+// "X,Y" as two finite numbers.
+std::optional<core::Vec2> parse_point(const std::string& text) {
+  const std::vector<std::string> parts = split_commas(text);
+  if (parts.size() != 2) return std::nullopt;
+  core::Vec2 p;
+  for (int k = 0; k < 2; ++k) {
+    std::string_view field(parts[k]);
+    if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+    const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), p[k]);
+    if (field.empty() || error != std::errc() || end != field.data() + field.size() || !std::isfinite(p[k]))
+      return std::nullopt;
+  }
+  return p;
+}
+
+// The world a recording is imported into: a paper's world by name, else a scenario file's obstacles, sensor
+// and radii (its target path and robot are replaced).
+core::Scenario import_world(const std::string& world) {
+  if (world == "six-wall" || world == "six-wall-sliding") return sim::six_wall_world(world == "six-wall-sliding");
+  if (world == "random") return sim::random_world();
+  return io::read_scenario(world);
+}
+
+int run_import(const ImportOptions& o) {
+  const std::vector<std::string> columns = split_commas(o.columns);
+  if (columns.size() != 3) {
+    std::cerr << "occtrack scenario import: --columns: expected three columns TIME,X,Y (indices from 0 or header "
+                 "names), got '"
+              << o.columns << "'\n";
+    return kExitInputError;
+  }
+  sim::RecordedPathSettings settings;
+  if (!o.robot_start.empty()) {
+    settings.robot_start = parse_point(o.robot_start);
+    if (!settings.robot_start) {
+      std::cerr << "occtrack scenario import: --robot-start: expected X,Y (two finite numbers; write "
+                   "--robot-start=-1,2 when X is negative), got '"
+                << o.robot_start << "'\n";
+      return kExitInputError;
+    }
+  }
+  if (o.from) settings.from = *o.from;
+  if (o.to) settings.to = *o.to;
+  settings.period = o.period;
+  std::string error;
+  if (!settings.validate(&error)) {
+    std::cerr << "occtrack scenario import: " << error << "\n";
+    return kExitInputError;
+  }
+  const std::vector<core::TargetWaypoint> samples =
+      io::read_target_path(o.recording, {columns[0], columns[1], columns[2], o.time_scale});
+  const core::Scenario world = import_world(o.world);
+  const std::filesystem::path path(o.out);
+  sim::RecordedPathReport report;
+  const core::Scenario s = sim::scenario_from_recorded_path(
+      world, samples, settings, o.name.empty() ? path.stem().string() : o.name, &report);
+  char resampled[64] = "every sample kept";
+  if (o.period > 0.0) std::snprintf(resampled, sizeof resampled, "resampled every %g s", o.period);
+  std::printf("%s: %d of its %zu samples used, %s; the robot starts at (%.4g, %.4g), %.2f m from the nearest "
+              "obstacle, %s\n",
+              o.recording.c_str(), report.samples_used, samples.size(), resampled, s.robot_position.x(),
+              s.robot_position.y(), report.robot_clearance,
+              report.robot_sees_target ? "in sight of the target" : "NOT in sight of the target");
+  Summary summary;
+  write_scenario(s, path, summary);
+  if (report.overlap_time > 0.0)
+    std::cerr << "occtrack scenario import: warning: the target's disk (radius " << s.target_radius
+              << " m) overlaps an obstacle for " << report.overlap_time << " s of the path, first at t = "
+              << report.first_overlap << " s: is the recording in this world's frame?\n";
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_scenario_command(CLI::App& app, int& exit_code) {
@@ -227,6 +333,34 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
     if (!o->paper_world.empty()) return run_paper_world(*o);
     return o->suite.empty() ? run_single(*o) : run_suites(*o);
   });
+
+  auto [import, io_] = add_command<ImportOptions>(
+      *scenario, "import",
+      "Make a scenario of a recorded target path (a CSV or whitespace table of time, x, y in the world's frame) "
+      "in a paper's world or a scenario file's world; the robot starts 2 m behind the target's first position "
+      "(scenarios/README.md, \"Your own recorded target paths\")");
+  import->add_option("recording", io_->recording, "The recorded path: one row per sample")->required();
+  import->add_option("--world", io_->world,
+                     "six-wall, six-wall-sliding or random (the paper's worlds), or a scenario file whose obstacles, "
+                     "sensor and radii to use")
+      ->required();
+  import->add_option("--out", io_->out, "The scenario file to write")->required();
+  import->add_option("--columns", io_->columns,
+                     "Columns of time, x and y: indices from 0, or names in the table's header row")
+      ->capture_default_str();
+  add_bounded_option(import, "--time-scale", io_->time_scale,
+                     "Multiplies the time column to make seconds (1e-9 for nanoseconds)", 1e-12, 1e12);
+  import->add_option("--from", io_->from, "s, in the recording's clock: the first sample used (default: the first)");
+  import->add_option("--to", io_->to, "s, in the recording's clock: the last sample used (default: the last)");
+  import->add_option("--period", io_->period,
+                     "s between waypoints: the path is resampled by linear interpolation; 0 keeps every sample")
+      ->check(CLI::Range(0.0, 60.0))
+      ->capture_default_str();
+  import->add_option("--robot-start", io_->robot_start,
+                     "X,Y: where the robot starts (default: 2 m behind the target's first position, 0.5 m clear "
+                     "of obstacles, in sight of the target)");
+  import->add_option("--name", io_->name, "The scenario's name (default: the output file's stem)");
+  set_command_body(import, exit_code, [o = io_] { return run_import(*o); });
 }
 
 }  // namespace occtrack::app

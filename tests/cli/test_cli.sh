@@ -383,4 +383,53 @@ else
   fail "run refuses --moving-speed-max 0 by name" "rc $rc; $(tail_of "$tmp/err")"
 fi
 
+# ------------------------------------------------------------------------------------------------------------
+# scenario import: a recorded target path (nanosecond clock, named columns, as `rostopic echo -p` writes) made
+# into a scenario of the paper's six-wall world, then run.
+python3 - "$tmp/recording.csv" <<'PY'
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("%time,field.header.seq,field.pose.pose.position.x,field.pose.pose.position.y\n")
+    for i in range(1001):  # 10 s at 100 Hz, 1 m/s up the line x = 8 (east of the walls)
+        t = i * 0.01
+        f.write("%d,%d,%.4f,%.4f\n" % (1700000000000000000 + i * 10000000, i, 8.0, -5.0 + t))
+PY
+run_tool scenario import "$tmp/recording.csv" --world six-wall --out "$tmp/imported.yaml" --time-scale 1e-9 \
+  --columns %time,field.pose.pose.position.x,field.pose.pose.position.y
+if [ "$rc" -eq 0 ] && contains "$tmp/out" "1001 of its 1001 samples used, resampled every 0.1 s" \
+   && contains "$tmp/out" "the robot starts at (8, -7)" && contains "$tmp/out" "101 waypoints over 10 s" \
+   && ! contains "$tmp/err" "warning"; then
+  pass "scenario import makes a scenario of a recorded path, the robot 2 m behind the target's start"
+else
+  fail "scenario import makes a scenario of a recorded path" "rc $rc; $(tail_of "$tmp/out"); $(tail_of "$tmp/err")"
+fi
+run_tool run "$tmp/imported.yaml" --planner follower
+if [ "$rc" -eq 0 ] && contains "$tmp/out" "collisions"; then
+  pass "run runs an imported scenario"
+else
+  fail "run runs an imported scenario" "rc $rc; $(tail_of "$tmp/err")"
+fi
+printf '0 8 -5\n1 8 -4\n1 8 -3\n' > "$tmp/repeated_time.txt"
+run_tool scenario import "$tmp/repeated_time.txt" --world six-wall --out "$tmp/refused.yaml"
+if [ "$rc" -eq 1 ] && contains "$tmp/err" "repeated_time.txt: line 3: times must strictly increase" \
+   && [ ! -e "$tmp/refused.yaml" ]; then
+  pass "scenario import refuses times that do not increase, naming the line, and writes nothing"
+else
+  fail "scenario import refuses times that do not increase" "rc $rc; $(tail_of "$tmp/err")"
+fi
+run_tool scenario import "$tmp/recording.csv" --world six-wall --out "$tmp/refused.yaml" --columns %time,x,y
+if [ "$rc" -eq 1 ] && contains "$tmp/err" "no column named 'x'"; then
+  pass "scenario import refuses a column name the header does not have"
+else
+  fail "scenario import refuses a column name the header does not have" "rc $rc; $(tail_of "$tmp/err")"
+fi
+printf '0 0 0\n10 10 0\n' > "$tmp/through_walls.txt"
+run_tool scenario import "$tmp/through_walls.txt" --world six-wall --out "$tmp/through_walls.yaml" --robot-start=-2,0
+if [ "$rc" -eq 0 ] && contains "$tmp/err" "warning: the target's disk (radius 0.25 m) overlaps an obstacle" \
+   && contains "$tmp/out" "the robot starts at (-2, 0)"; then
+  pass "scenario import warns when the path runs through the world's obstacles, and takes --robot-start"
+else
+  fail "scenario import warns when the path runs through obstacles" "rc $rc; $(tail_of "$tmp/err")"
+fi
+
 finish
