@@ -3,7 +3,7 @@
 # dictionary (fuzz/dict/NAME.dict). Exits non-zero when any target finds something (crash, sanitizer report,
 # leak, timeout, out of memory, or an exception outside its contract), and prints where the input was saved.
 #
-#   fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]     # targets: scenario projection_case safetensors model_file
+#   fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]     # targets: scenario target_path projection_case safetensors model_file
 #                                                   # dataset_file (default: all), SECONDS default 60
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -11,7 +11,7 @@ build="${1:?usage: fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]}"
 seconds="${2:-60}"
 shift $(($# < 2 ? $# : 2))
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scenario projection_case safetensors model_file dataset_file)
+[ ${#targets[@]} -eq 0 ] && targets=(scenario target_path projection_case safetensors model_file dataset_file)
 
 work="$(mktemp -d "${TMPDIR:-/tmp}/occtrack-fuzz.XXXXXX")"
 findings="$build/fuzz-findings"

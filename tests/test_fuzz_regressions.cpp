@@ -18,7 +18,9 @@
 #include "occtrack/io/projection_case.hpp"
 #include "occtrack/io/safetensors.hpp"
 #include "occtrack/io/scenario.hpp"
+#include "occtrack/io/target_path.hpp"
 #include "occtrack/policy/model.hpp"
+#include "occtrack/sim/recorded_path.hpp"
 
 namespace occtrack {
 namespace {
@@ -49,9 +51,11 @@ void read_as_target(const fs::path& path) {
     policy::Model::load(file);
   } else if (is("dataset_file")) {
     io::dataset_statistics(io::read_dataset_file(file));
+  } else if (is("target_path")) {
+    io::read_target_path(file);
   } else {
-    FAIL() << name << ": name it <target>-<short>.bin, target one of scenario, projection_case, safetensors, "
-                      "model_file, dataset_file";
+    FAIL() << name << ": name it <target>-<short>.bin, target one of scenario, target_path, projection_case, "
+                      "safetensors, model_file, dataset_file";
   }
 }
 
@@ -97,6 +101,23 @@ TEST(FuzzRegressions, SafetensorsDimensionBeyondInt64) {
     FAIL() << "expected an io::InputError";
   } catch (const io::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("shape is too large"), std::string::npos) << e.what();
+  }
+}
+
+// A recorded path with a y of 1e308 (a finite number): the scenario maker rounded it to 4 decimals through
+// 1e308 x 1e4, an infinity, and the simulator refused the scenario it had made with an exception the caller
+// did not expect. Coordinates beyond 1e6 m are now refused first, as invalid samples.
+TEST(FuzzRegressions, RecordedPathCoordinateNearTheLargestDouble) {
+  const std::string path = (kRegressions / "target_path-coordinate-1e308.bin").string();
+  const std::vector<core::TargetWaypoint> samples = io::read_target_path(path);
+  ASSERT_EQ(samples.size(), 4u);
+  EXPECT_EQ(samples[2].position.y(), 1e308);
+  try {
+    sim::scenario_from_recorded_path(core::Scenario{}, samples, {}, "fuzz");
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sample 2 lies more than 1000000 m from the origin"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -168,6 +168,10 @@ TEST(RecordedPath, RefusesARobotStartInAnObstacleAndSaysWhenNoneFits) {
   auto nanoseconds = samples;
   for (TargetWaypoint& w : nanoseconds) w.time *= 1e9;
   EXPECT_THROW(scenario_from_recorded_path(one_circle(), nanoseconds, {}, "rec"), std::runtime_error);
+  // Coordinates beyond 1e6 m (a recording in another unit or frame) are refused before any arithmetic.
+  auto far = samples;
+  far[3].position.x() = 1e300;
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), far, {}, "rec"), std::invalid_argument);
   settings = {};
   settings.period = 0.0005;
   EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, settings, "rec"), std::invalid_argument);

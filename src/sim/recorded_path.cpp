@@ -22,6 +22,8 @@ constexpr double kOverlapStep = 0.05;  // s between the checks of the target's d
 // Waypoints a made scenario may hold: 28 hours at 0.1 s, about 30 MB of YAML. A recording's clock read in the
 // wrong unit (nanoseconds as seconds) asks for far more.
 constexpr double kMaxWaypoints = 1e6;
+// m: no coordinate of a sample may lie farther out (the interpolation and the geometry stay finite).
+constexpr double kMaxCoordinate = 1e6;
 
 Vec2 position_at(const std::vector<TargetWaypoint>& samples, double t, std::size_t& k) {
   while (k + 2 < samples.size() && samples[k + 1].time <= t) ++k;
@@ -58,6 +60,10 @@ core::Scenario scenario_from_recorded_path(const core::Scenario& world, const st
   for (std::size_t k = 0; k < samples.size(); ++k) {
     if (!std::isfinite(samples[k].time) || !samples[k].position.allFinite())
       throw std::invalid_argument("recorded path: sample " + std::to_string(k) + " is not finite");
+    if (!(samples[k].position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      throw std::invalid_argument("recorded path: sample " + std::to_string(k) + " lies more than " +
+                                  std::to_string(static_cast<long long>(kMaxCoordinate)) +
+                                  " m from the origin along an axis: is the position in metres, in the world's frame?");
     if (k > 0 && !(samples[k].time > samples[k - 1].time))
       throw std::invalid_argument("recorded path: times must strictly increase (sample " + std::to_string(k) + ")");
   }

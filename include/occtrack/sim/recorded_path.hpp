@@ -46,7 +46,8 @@ struct RecordedPathReport {
 
 /// The scenario: `world`'s obstacles, sensor and radii, `samples` (times strictly increasing, any origin)
 /// within the settings' stretch as the target's path from t = 0, the duration its last waypoint's time, the
-/// robot as the settings say, named `name`. Throws std::invalid_argument for invalid settings or samples, and
+/// robot as the settings say, named `name`. Throws std::invalid_argument for invalid settings or samples (not
+/// finite, times not strictly increasing, a coordinate beyond 1e6 m), and
 /// std::runtime_error when the stretch holds less than two waypoints or would make more than a million, when
 /// no robot start fits, or when a given one overlaps an obstacle.
 core::Scenario scenario_from_recorded_path(const core::Scenario& world, const std::vector<core::TargetWaypoint>& samples,
