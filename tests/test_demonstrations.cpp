@@ -204,6 +204,7 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   EXPECT_EQ(generator.at("episodes"), 2);
   EXPECT_EQ(generator.at("duration"), 3.0);
   EXPECT_FALSE(generator.contains("jobs"));
+  EXPECT_FALSE(generator.contains("scenarios"));  // named only when given: generated files keep their bytes
 
   const sim::Demonstrations back = io::read_dataset_file(path);
   EXPECT_EQ(back.rows, S);
@@ -230,6 +231,43 @@ TEST(Demonstrations, GeneratedFileReadsBackWithTheContractsShapesAndMetadata) {
   // this test's small expert (few samples, one CEM iteration) picks among few plans, so allow 50% over it.
   EXPECT_LE(stats.plan_speed_max, 2.0 * 1.5);
   std::filesystem::remove(path);
+}
+
+TEST(Demonstrations, GivenScenariosAreDrivenInTurnForAtMostTheDuration) {
+  sim::DemonstrationSettings settings = tiny();
+  core::Scenario short_one = orbit(1.0), long_one = orbit(10.0);
+  short_one.name = "short";
+  long_one.name = "long";
+  long_one.robot_position = {-4.0, 1.0};
+  settings.scenarios = {short_one, long_one};
+  settings.episodes = 3;  // the third is the short one again, with its own seed
+  settings.duration = 2.0;
+  sim::DemonstrationReport report;
+  const sim::Demonstrations data = sim::generate_demonstrations(settings, &report);
+  EXPECT_EQ(report.episodes, 3);
+  EXPECT_EQ(report.cycles, 20 + 40 + 20);  // 1 s, 2 s (of 10) and 1 s at 20 Hz
+  std::vector<int> first_row(3, -1);
+  for (std::int64_t r = 0; r < data.rows; ++r) {
+    const int e = data.episode[static_cast<std::size_t>(r)];
+    ASSERT_GE(e, 0);
+    ASSERT_LT(e, 3);
+    if (first_row[static_cast<std::size_t>(e)] < 0) first_row[static_cast<std::size_t>(e)] = static_cast<int>(r);
+  }
+  // The first row's target, seen from the robot's start: the scenario's, up to the noise-free estimate.
+  const auto target_seen = [&](int e) {
+    const std::size_t r = static_cast<std::size_t>(first_row[static_cast<std::size_t>(e)]);
+    return Eigen::Vector2d(data.observation[6 * r + 2], data.observation[6 * r + 3]);
+  };
+  EXPECT_TRUE(target_seen(0).isApprox(Eigen::Vector2d(2.0, 0.0), 1e-6));   // (-2, -1) from (-4, -1)
+  EXPECT_TRUE(target_seen(1).isApprox(Eigen::Vector2d(2.0, -2.0), 1e-6));  // from (-4, 1)
+  EXPECT_TRUE(target_seen(2).isApprox(Eigen::Vector2d(2.0, 0.0), 1e-6));
+  const auto generator = nlohmann::json::parse(data.metadata.at("generator"));
+  EXPECT_EQ(generator.at("scenarios"), nlohmann::json({"short", "long"}));
+  // A scenario without a target path is refused by name.
+  settings.scenarios[1].target.clear();
+  std::string error;
+  EXPECT_FALSE(settings.validate(&error));
+  EXPECT_EQ(error, "scenarios: 'long' has no target path or no duration");
 }
 
 TEST(Demonstrations, OnlyALearnedDriverMakesADaggerRound) {

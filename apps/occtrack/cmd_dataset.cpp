@@ -1,5 +1,6 @@
 // occtrack dataset generate --out FILE [--episodes 8] [--seed 5000] [--duration 40]
 //                           [--worlds forest,boxes,mixed,dynamic] [--speeds 1,1.5,2] [--label-every 1]
+//                           [--scenarios FILE|DIR,...]
 //                           [--driver expert|projcem|NAME] [--model FILE] [--jobs J]
 //                           [--expert-samples 120] [--expert-iterations 8] [--expert-settle 0]
 //                           [--target smooth|teleop] [--no-shield] [Protocol v2: --latency MS --tau S
@@ -9,7 +10,8 @@
 //
 // Demonstrations for training (docs/learning.md, "Dataset file"): closed-loop episodes on generated worlds
 // whose seeds are outside the benchmark's 1000-1999, labelled by the offline Proj-CEM expert, written as one
-// safetensors file. `info` prints a file's metadata, tensor shapes and statistics; `merge` concatenates
+// safetensors file; or, with --scenarios, on scenario files (your own recorded target paths, made with
+// `scenario import`; a benchmark suite's folder is refused). `info` prints a file's metadata, tensor shapes and statistics; `merge` concatenates
 // files made with the same projection and perception settings (episode indices renumbered).
 //
 // `mpirun -n R occtrack dataset generate ...` shares the episodes among R ranks (docs/scaling.md,
@@ -30,7 +32,10 @@
 #include "mpi_world.hpp"
 #include "occtrack/io/dataset_file.hpp"
 #include "occtrack/io/safetensors.hpp"
+#include "occtrack/io/scenario.hpp"
 #include "occtrack/sim/demonstrations.hpp"
+#include "occtrack/sim/scenario_generator.hpp"
+#include "suite_runner.hpp"
 
 namespace occtrack::app {
 
@@ -38,9 +43,10 @@ namespace {
 
 struct GenerateOptions {
   std::string out;
-  int episodes = 8;
+  int episodes = 0;  ///< 0: 8, or one per scenario with --scenarios
   std::uint64_t seed = 5000;
-  double duration = 40.0;
+  std::optional<double> duration;  ///< default: 40 s, or each scenario's own length with --scenarios
+  std::vector<std::string> scenarios;  ///< scenario files or folders of them (instead of generated worlds)
   std::vector<std::string> worlds = {"forest", "boxes", "mixed", "dynamic"};
   std::vector<double> speeds = {1.0, 1.5, 2.0};
   int label_every = 1;
@@ -81,11 +87,35 @@ std::string speeds_text(const GenerateOptions& o) {
   return join(speeds);
 }
 
+/// s per episode: --duration, else 40 s for generated episodes and each scenario's own length for files (the
+/// settings' largest, 36000 s).
+double duration_of(const GenerateOptions& o) { return o.duration.value_or(o.scenarios.empty() ? 40.0 : 36000.0); }
+
+/// The scenarios of --scenarios, read; a file in a benchmark suite's folder is refused, so that no benchmark
+/// episode is trained on (scenarios/README.md, "Seeds: benchmark against training").
+std::vector<core::Scenario> read_training_scenarios(const std::vector<std::string>& paths) {
+  std::vector<core::Scenario> scenarios;
+  for (const std::string& path : paths)
+    for (const std::filesystem::path& file : file_or_scenario_files(path)) {
+      const std::string folder = std::filesystem::absolute(file).parent_path().filename().string();
+      if (sim::find_suite(folder))
+        throw std::invalid_argument("--scenarios: " + file.string() + " is in the folder of benchmark suite " +
+                                    folder + ": training on the benchmark's episodes would make its results "
+                                    "meaningless; import or generate other episodes");
+      scenarios.push_back(io::read_scenario(file.string()));
+    }
+  return scenarios;
+}
+
 std::string canonical_command(const GenerateOptions& o) {
   std::string text = "occtrack dataset generate --episodes " + std::to_string(o.episodes) + " --seed " +
-                     std::to_string(o.seed) + " --duration " + number_text(o.duration) + " --worlds " +
-                     join(o.worlds) + " --speeds " + speeds_text(o) + " --label-every " +
-                     std::to_string(o.label_every) + " --driver " + o.driver;
+                     std::to_string(o.seed);
+  if (o.scenarios.empty() || o.duration) text += " --duration " + number_text(duration_of(o));
+  if (o.scenarios.empty())
+    text += " --worlds " + join(o.worlds) + " --speeds " + speeds_text(o);
+  else
+    text += " --scenarios " + join(o.scenarios);
+  text += " --label-every " + std::to_string(o.label_every) + " --driver " + o.driver;
   if (!o.model.empty()) text += " --model " + o.model;
   if (o.driver != "expert") {
     const planners::PlannerOptions& driver = o.episode.planner_options;
@@ -234,7 +264,7 @@ int generate_shared(const MpiWorld& world, const std::string& out, sim::Demonstr
   return world.broadcast_from_root(code);
 }
 
-int generate(const GenerateOptions& o) {
+int generate(GenerateOptions o) {
   const char* const who = "occtrack dataset generate: ";
   // Under MPI, every rank checks the options alike, before any communication; rank 0 alone says what is
   // wrong, and every rank exits with the same code.
@@ -251,6 +281,12 @@ int generate(const GenerateOptions& o) {
     return refuse(e.what());
   }
   sim::DemonstrationSettings s;
+  try {
+    s.scenarios = read_training_scenarios(o.scenarios);
+  } catch (const std::exception& e) {
+    return refuse(e.what());
+  }
+  if (o.episodes == 0) o.episodes = s.scenarios.empty() ? 8 : static_cast<int>(s.scenarios.size());
   s.episodes = o.episodes;
   s.first_seed = o.seed;
   s.worlds.clear();
@@ -273,7 +309,7 @@ int generate(const GenerateOptions& o) {
   } catch (const std::invalid_argument& e) {
     return refuse(e.what());
   }
-  s.duration = o.duration;
+  s.duration = duration_of(o);
   s.label_every = o.label_every;
   s.driver = o.driver;
   s.model = o.model;
@@ -294,12 +330,21 @@ int generate(const GenerateOptions& o) {
   if (!world->root()) return generate_shared(*world, o.out, s, {});  // rank 0 alone reports
   const std::string parallel = ranks > 1 ? std::to_string(ranks) + " ranks, " + std::to_string(jobs) + " jobs each"
                                          : std::to_string(jobs) + " jobs";
+  char source[512];
+  if (s.scenarios.empty())
+    std::snprintf(source, sizeof source, "of %.0f s (seeds %llu-%llu; worlds %s; %s target, top speeds %s m/s)",
+                  s.duration, static_cast<unsigned long long>(o.seed),
+                  static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)),
+                  join(o.worlds).c_str(), o.target.c_str(), speeds_text(o).c_str());
+  else
+    std::snprintf(source, sizeof source, "on %zu scenario files (each its own length%s; seeds %llu-%llu)",
+                  s.scenarios.size(), o.duration ? (", at most " + number_text(*o.duration) + " s").c_str() : "",
+                  static_cast<unsigned long long>(o.seed),
+                  static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)));
   std::fprintf(stderr,
-               "dataset: %d episodes of %.0f s (seeds %llu-%llu; worlds %s; %s target, top speeds %s m/s), driver "
+               "dataset: %d episodes %s, driver "
                "%s%s, expert %d samples x %d CEM iterations, labelling 1 cycle in %d, latency %s, tau %g s, %s\n",
-               o.episodes, o.duration, static_cast<unsigned long long>(o.seed),
-               static_cast<unsigned long long>(sim::demonstration_seed(s, o.episodes - 1)), join(o.worlds).c_str(),
-               o.target.c_str(), speeds_text(o).c_str(), o.driver.c_str(),
+               o.episodes, source, o.driver.c_str(),
                o.driver != "expert" && s.driver_options.shield ? " (shield on)" : "", o.expert_samples,
                o.expert_iterations, o.label_every, o.episode.latency.c_str(), o.episode.tau, parallel.c_str());
   // Under MPI, rank 0's progress is that of its own episodes.
@@ -327,10 +372,17 @@ void add_generate_command(CLI::App& dataset, int& exit_code) {
       "Run closed-loop episodes on generated worlds (seeds outside the benchmark's 1000-1999) and write the "
       "expert's labelled planning cycles as a safetensors dataset");
   gen->add_option("--out", o->out, "Dataset file to write (safetensors)")->required();
-  gen->add_option("--episodes", o->episodes, "Episodes, each in a world of its own")->capture_default_str();
+  gen->add_option("--episodes", o->episodes,
+                  "Episodes, each in a world of its own (default 8; with --scenarios, one per scenario)");
   gen->add_option("--seed", o->seed, "First seed; episode i uses seed + i (none may fall in 1000-1999)")
       ->capture_default_str();
-  gen->add_option("--duration", o->duration, "Simulated seconds per episode")->capture_default_str();
+  gen->add_option("--duration", o->duration,
+                  "Simulated seconds per episode (default 40; with --scenarios, at most, default each one's length)");
+  gen->add_option("--scenarios", o->scenarios,
+                  "Scenario files or folders of them to drive instead of generated worlds (your own recorded "
+                  "target paths, `scenario import`); episode i runs the (i mod N)-th; a benchmark suite's folder "
+                  "is refused")
+      ->delimiter(',');
   gen->add_option("--worlds", o->worlds,
                   "World kinds, used in turn: forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, "
                   "sixwall-sliding, random")

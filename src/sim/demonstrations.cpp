@@ -137,6 +137,10 @@ bool DemonstrationSettings::validate(std::string* error) const {
     why << "first_seed (" << first_seed << "): the episodes would use seeds " << first_seed << "-" << last
         << ", which meet the benchmark's seeds " << kBenchmarkSeedMin << "-" << kBenchmarkSeedMax
         << " (sim::is_benchmark_seed); training data must come from other worlds, e.g. first_seed 5000";
+  } else if (auto bad = std::find_if(scenarios.begin(), scenarios.end(),
+                                     [](const core::Scenario& sc) { return sc.target.empty() || !(sc.duration > 0.0); });
+             bad != scenarios.end()) {
+    why << "scenarios: '" << bad->name << "' has no target path or no duration";
   } else if (worlds.empty()) {
     why << "worlds must not be empty (forest, boxes, mixed, dynamic, clutter-dynamic, sixwall, sixwall-sliding, "
            "random)";
@@ -227,7 +231,7 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                       {"violation_weight", s.expert.ranking.violation_weight},
                       {"band", {s.expert.ranking.band.min, s.expert.ranking.band.reference, s.expert.ranking.band.max}}}}};
   // `jobs` is left out on purpose: it does not change the rows, and the file should not change with it.
-  const json generator{{"world_kinds", kinds},
+  json generator{{"world_kinds", kinds},
                        {"target", to_string(s.target)},
                        {"first_seed", s.first_seed},
                        {"episodes", s.episodes},
@@ -236,8 +240,10 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                        {"label_every", s.label_every},
                        {"driver", s.driver},
                        {"model", s.model},
-                       {"seeds", "episode i: world, target path, sensor noise and planners from first_seed + i; "
-                                 "world kind worlds[i % W], target speed target_speeds[(i / W) % S]"},
+                       {"seeds", s.scenarios.empty()
+                                     ? "episode i: world, target path, sensor noise and planners from first_seed + i; "
+                                       "world kind worlds[i % W], target speed target_speeds[(i / W) % S]"
+                                     : "episode i: scenarios[i % N]; sensor noise and planners from first_seed + i"},
                        {"physics_step", s.episode.physics_step},
                        {"planning_period", s.episode.planning_period},
                        {"robot_accel_max", s.episode.robot_accel_max},
@@ -248,6 +254,12 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                        {"target_noise", {s.episode.target_position_noise, s.episode.target_velocity_noise}},
                        {"driver_shield", s.driver != "expert" && s.driver_options.shield},
                        {"response_time", s.driver_options.response_time}};
+  // Named only when given, so that a file of generated episodes keeps the bytes it had before the option.
+  if (!s.scenarios.empty()) {
+    json names = json::array();
+    for (const core::Scenario& sc : s.scenarios) names.push_back(sc.name);
+    generator["scenarios"] = names;
+  }
   return {{"format", io::kDatasetFormat},
           {"projection", io::projection_settings_json(s.expert.projection)},
           {"perception", perception_json(s.expert.perception).dump()},
@@ -421,11 +433,20 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
       const std::uint64_t seed = demonstration_seed(settings, i);
       const DemonstrationWorld kind = settings.worlds[static_cast<std::size_t>(i % W)];
       const double speed = settings.target_speeds[static_cast<std::size_t>((i / W) % S)];
-      const std::string name = std::string("demo-") + to_string(kind) + "-" + std::to_string(seed);
+      const core::Scenario* given =
+          settings.scenarios.empty() ? nullptr : &settings.scenarios[static_cast<std::size_t>(i) % settings.scenarios.size()];
+      const std::string name =
+          std::string("demo-") + (given ? given->name : std::string(to_string(kind))) + "-" + std::to_string(seed);
       try {
         core::Scenario scenario;
         try {
-          scenario = demonstration_scenario(settings, kind, speed, seed, name);
+          if (given) {
+            scenario = *given;
+            scenario.name = name;
+            scenario.duration = std::min(scenario.duration, settings.duration);
+          } else {
+            scenario = demonstration_scenario(settings, kind, speed, seed, name);
+          }
         } catch (const std::runtime_error& e) {  // the generator could not place obstacles or a path: skip
           const std::lock_guard<std::mutex> guard(lock);
           ++report.episodes_failed;

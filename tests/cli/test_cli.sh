@@ -432,4 +432,28 @@ else
   fail "scenario import warns when the path runs through obstacles" "rc $rc; $(tail_of "$tmp/err")"
 fi
 
+# dataset generate --scenarios: the expert labels episodes on your own scenarios; a benchmark suite's are refused.
+run_tool dataset generate --scenarios "$tmp/imported.yaml" --duration 1 --expert-samples 16 --expert-iterations 1 \
+  --jobs 1 --out "$tmp/mine.safetensors"
+if [ "$rc" -eq 0 ] && contains "$tmp/err" "dataset: 1 episodes on 1 scenario files (each its own length, at most 1 s" \
+   && contains "$tmp/out" "20 rows from 1 episodes"; then
+  pass "dataset generate labels episodes on a given scenario, for at most --duration"
+else
+  fail "dataset generate labels episodes on a given scenario" "rc $rc; $(tail_of "$tmp/out"); $(tail_of "$tmp/err")"
+fi
+run_tool dataset info "$tmp/mine.safetensors"
+if [ "$rc" -eq 0 ] && contains "$tmp/out" '"scenarios":["imported"]' && contains "$tmp/out" "--scenarios $tmp/imported.yaml"; then
+  pass "dataset info shows the scenarios a file was made on"
+else
+  fail "dataset info shows the scenarios a file was made on" "rc $rc; $(tail_of "$tmp/out")"
+fi
+mkdir -p "$tmp/sixwall-2ms" && cp "$tmp/imported.yaml" "$tmp/sixwall-2ms/"
+run_tool dataset generate --scenarios "$tmp/sixwall-2ms" --duration 1 --out "$tmp/refused.safetensors"
+if [ "$rc" -eq 1 ] && contains "$tmp/err" "is in the folder of benchmark suite sixwall-2ms" \
+   && [ ! -e "$tmp/refused.safetensors" ]; then
+  pass "dataset generate refuses a benchmark suite's folder of scenarios"
+else
+  fail "dataset generate refuses a benchmark suite's folder of scenarios" "rc $rc; $(tail_of "$tmp/err")"
+fi
+
 finish

@@ -84,7 +84,12 @@ struct DemonstrationSettings {
                                             DemonstrationWorld::mixed, DemonstrationWorld::dynamic};
   std::vector<double> target_speeds = {1.0, 1.5, 2.0};  ///< m/s, the target's top speed
   DemonstrationTarget target = DemonstrationTarget::smooth;
-  double duration = 40.0;  ///< simulated seconds per episode
+  /// Scenarios to drive instead of generated ones (your own recorded target paths, `scenario import`): when
+  /// not empty, episode i runs scenarios[i % N] for min(its duration, `duration`), and `worlds`,
+  /// `target_speeds` and `target` are not used; the seed first_seed + i still draws the sensor noise and the
+  /// planners' samples. Their names are recorded in the metadata.
+  std::vector<core::Scenario> scenarios;
+  double duration = 40.0;  ///< simulated seconds per episode (at most, with `scenarios`)
   /// Label one planning cycle in this many (the first cycle of an episode is always labelled).
   int label_every = 1;
   /// Who drives: "expert" (the expert's own plan is the command; it runs once per cycle), or any name
