@@ -174,7 +174,7 @@ int run_single(const Options& o) {
 // the paper's target start (areas as the v2 suites'), the robot at the paper's drone start.
 int run_paper_world(const Options& o) {
   const bool six_wall = o.paper_world != "random";
-  const core::Scenario world = six_wall ? sim::six_wall_world(o.paper_world == "six-wall-sliding") : sim::random_world();
+  const core::Scenario world = sim::paper_world(o.paper_world).value();  // CLI11 checked the name
   const sim::PaperStart start = six_wall ? sim::six_wall_start() : sim::random_world_start();
   const sim::WorldArea area = six_wall ? sim::six_wall_area() : sim::random_world_area();
   sim::TargetSettings target = sim::teleop_target_in(area, o.target_speed, o.duration.value_or(60.0));
@@ -233,8 +233,7 @@ std::optional<core::Vec2> parse_point(const std::string& text) {
 // The world a recording is imported into: a paper's world by name, else a scenario file's obstacles, sensor
 // and radii (its target path and robot are replaced).
 core::Scenario import_world(const std::string& world) {
-  if (world == "six-wall" || world == "six-wall-sliding") return sim::six_wall_world(world == "six-wall-sliding");
-  if (world == "random") return sim::random_world();
+  if (std::optional<core::Scenario> paper = sim::paper_world(world)) return *paper;
   return io::read_scenario(world);
 }
 

@@ -105,6 +105,12 @@ core::Scenario random_world() {
 
 PaperStart random_world_start() { return {Vec2(-3.0, 0.0), Vec2(-0.6, -1.0)}; }
 
+std::optional<core::Scenario> paper_world(std::string_view name) {
+  if (name == "six-wall" || name == "six-wall-sliding") return six_wall_world(name == "six-wall-sliding");
+  if (name == "random") return random_world();
+  return std::nullopt;
+}
+
 WorldArea six_wall_area() { return {15.0, 16.0, 2.0, 0.5}; }
 WorldArea random_world_area() { return {31.0, 27.0, -0.5, 1.2}; }
 

@@ -91,7 +91,9 @@ core::Scenario scenario_from_recorded_path(const core::Scenario& world, const st
                                std::to_string(settings.period) +
                                " s: is the time in seconds (the time scale)? Choose a stretch (from, to) or a "
                                "longer period");
-    const long long steps = static_cast<long long>(std::floor(span / settings.period + 1e-9));
+    // A wall clock's times (1.7e9 s, spaced to 2.4e-7 s) make a 10 s stretch 9.9999998 s long: the grid may end
+    // up to a thousandth of a period after the last sample, where the path holds it.
+    const long long steps = static_cast<long long>(std::floor(span / settings.period + 1e-3));
     if (steps < 1)
       throw std::runtime_error("recorded path: the stretch lasts " + std::to_string(span) +
                                " s, shorter than one period (" + std::to_string(settings.period) + " s)");

@@ -5,6 +5,9 @@
 // given beside it (PaperStart), for episodes that begin as the paper's did.
 #pragma once
 
+#include <optional>
+#include <string_view>
+
 #include "occtrack/core/scenario.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
@@ -36,6 +39,11 @@ PaperStart six_wall_start();
 core::Scenario random_world();
 /// Drone (-3, 0), target (-0.6, -1).
 PaperStart random_world_start();
+
+/// A paper's world by the name the command line uses: "six-wall", "six-wall-sliding" or "random"; nullopt for
+/// any other name. (`scenario generate --paper-world`, `scenario import --world`, Python's
+/// scenario_from_path.)
+std::optional<core::Scenario> paper_world(std::string_view name);
 
 /// The rectangle a generated target roams in (TargetSettings::area_width, area_height, area_center_x/y):
 /// the world's obstacles with room round them. Six-wall: the walls, sliding ones at their farthest included,
