@@ -27,6 +27,8 @@
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/planners/planner.hpp"
 #include "occtrack/sim/episode.hpp"
+#include "occtrack/sim/paper_worlds.hpp"
+#include "occtrack/sim/recorded_path.hpp"
 #include "occtrack/sim/scenario_generator.hpp"
 
 namespace py = pybind11;
@@ -274,6 +276,44 @@ core::Scenario scenario_of(const py::object& scenario) {
   return io::read_scenario(path);
 }
 
+// A recorded target path, (N, 3) rows of time, x, y, as a scenario in `world` (a Scenario, a paper world's
+// name, or a scenario file), as `occtrack scenario import` makes it; warns (UserWarning) where the target
+// overlaps obstacles or the robot's start does not see it.
+core::Scenario scenario_from_path(const py::object& world, const Array& path, double period,
+                                  std::optional<double> from_time, std::optional<double> to_time,
+                                  std::optional<std::array<double, 2>> robot_start, const std::string& name) {
+  if (path.ndim() != 2 || path.shape(1) != 3)
+    throw std::invalid_argument("scenario_from_path: path must be an (N, 3) array of time, x, y");
+  std::vector<core::TargetWaypoint> samples(static_cast<std::size_t>(path.shape(0)));
+  const auto rows = path.unchecked<2>();
+  for (py::ssize_t i = 0; i < path.shape(0); ++i)
+    samples[static_cast<std::size_t>(i)] = {rows(i, 0), core::Vec2(rows(i, 1), rows(i, 2))};
+  core::Scenario layout;
+  if (py::isinstance<py::str>(world)) {
+    const std::optional<core::Scenario> paper = sim::paper_world(world.cast<std::string>());
+    layout = paper ? *paper : scenario_of(world);
+  } else {
+    layout = scenario_of(world);
+  }
+  sim::RecordedPathSettings settings;
+  settings.period = period;
+  if (from_time) settings.from = *from_time;
+  if (to_time) settings.to = *to_time;
+  if (robot_start) settings.robot_start = core::Vec2((*robot_start)[0], (*robot_start)[1]);
+  sim::RecordedPathReport report;
+  core::Scenario s = sim::scenario_from_recorded_path(layout, samples, settings, name, &report);
+  if (report.overlap_time > 0.0) {
+    const std::string message = "the target's disk overlaps an obstacle for " + std::to_string(report.overlap_time) +
+                                " s of the path, first at t = " + std::to_string(report.first_overlap) +
+                                " s: is the path in this world's frame?";
+    if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  }
+  if (!report.robot_sees_target &&
+      PyErr_WarnEx(PyExc_UserWarning, "the robot's start does not see the target's", 1) != 0)
+    throw py::error_already_set();
+  return s;
+}
+
 py::dict trace_dict(const core::Trace& trace) {
   py::dict d;
   d["time"] = py::array_t<double>(static_cast<py::ssize_t>(trace.time.size()), trace.time.data());
@@ -399,6 +439,14 @@ PYBIND11_MODULE(_occtrack, m) {
         "Reads and validates a scenario file");
   m.def("parse_scenario", &io::parse_scenario, py::arg("yaml_text"), py::arg("source") = "scenario",
         "A scenario from YAML text");
+  m.def("scenario_from_path", &scenario_from_path, py::arg("world"), py::arg("path"), py::kw_only(),
+        py::arg("period") = 0.1, py::arg("from_time") = py::none(), py::arg("to_time") = py::none(),
+        py::arg("robot_start") = py::none(), py::arg("name") = "recorded",
+        "A scenario of a recorded target path ((N, 3) rows of time, x, y in the world's frame) in `world`: "
+        "'six-wall', 'six-wall-sliding', 'random', a Scenario or a scenario file. As `occtrack scenario import`: "
+        "the samples from from_time to to_time, from t = 0, resampled every `period` s (0: every sample), the "
+        "robot 2 m behind the target's start unless robot_start=(x, y); warns when the target overlaps "
+        "obstacles (scenarios/README.md, \"Your own recorded target paths\")");
   m.def("suite_names", [] {
     std::vector<std::string> names;
     for (const auto& s : sim::benchmark_suites()) names.push_back(s.name);

@@ -20,6 +20,7 @@ from ._occtrack import (  # noqa: F401  (the public API)
     parse_scenario,
     planner_names,
     run_episode,
+    scenario_from_path,
     suite_names,
     suite_scenarios,
 )

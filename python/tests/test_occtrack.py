@@ -158,6 +158,27 @@ def test_scenarios_load_and_generate():
         occtrack.load_scenario("missing.yaml")
 
 
+def test_scenario_from_a_recorded_path():
+    t = np.arange(0.0, 10.0 + 1e-9, 0.01) + 1.7e9  # 100 Hz, a wall clock
+    path = np.stack([t, np.full_like(t, 8.0), -5.0 + (t - t[0])], axis=1)  # 1 m/s up x = 8, east of the walls
+    s = occtrack.scenario_from_path("six-wall-sliding", path)
+    assert s.target.shape == (101, 3) and s.target[0, 0] == 0.0
+    np.testing.assert_allclose(s.target[-1], [10.0, 8.0, 5.0], atol=1e-9)
+    np.testing.assert_allclose(s.robot_position, [8.0, -7.0])
+    assert len(s.obstacles) == 6 and all("path" in o for o in s.obstacles)
+    window = occtrack.scenario_from_path(s, path, period=0, from_time=t[100], to_time=t[200], name="window")
+    assert window.name == "window" and window.target.shape == (101, 3)
+    again = occtrack.parse_scenario(window.to_yaml())
+    np.testing.assert_allclose(again.target, window.target)
+    through = np.array([[0.0, 0.0, 0.0], [10.0, 10.0, 0.0]])  # straight through the walls
+    with pytest.warns(UserWarning, match="overlaps an obstacle"):
+        occtrack.scenario_from_path("six-wall", through, robot_start=(-2.0, 0.0))
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        occtrack.scenario_from_path("six-wall", path[:, :2])
+    with pytest.raises(ValueError, match="strictly increase"):
+        occtrack.scenario_from_path("six-wall", path[::-1])
+
+
 def test_models_load_as_arrays():
     tensors, metadata = occtrack.load_model(str(SOURCE / "models" / "cvae.safetensors"))
     assert metadata["format"].startswith("occtrack.model")
