@@ -157,13 +157,29 @@ TEST(RecordedPath, RefusesARobotStartInAnObstacleAndSaysWhenNoneFits) {
   EXPECT_FALSE(report.robot_sees_target);
   EXPECT_NEAR(report.robot_clearance, std::sqrt(1.5 * 1.5 + 0.5 * 0.5) - 1.0 - 0.25, 1e-9);
   // A circle of radius 1.2 where the robot would stand, 2 m behind the target, and wherever 0.6 rad either side
-  // puts it: no start fits.
+  // puts it: the start turns further round, to the first bearing 0.1 rad at a time that is 0.5 m clear of it.
   Scenario blocked;
   ObstacleSpec circle;
   circle.center = Vec2(-2.0, 3.0);
   circle.radius = 1.2;
   blocked.obstacles.push_back(circle);
-  EXPECT_THROW(scenario_from_recorded_path(blocked, samples, {}, "rec"), std::runtime_error);
+  const Scenario beside = scenario_from_recorded_path(blocked, samples, {}, "rec");
+  const double bearing = std::atan2(beside.robot_position.y() - 3.0, beside.robot_position.x());
+  EXPECT_NEAR((beside.robot_position - Vec2(0.0, 3.0)).norm(), 2.0, 1e-4);
+  EXPECT_GE((beside.robot_position - circle.center).norm(), 1.2 + 0.25 + 0.5);
+  // Turned by t from straight behind, the robot is 4 sin(t / 2) from the circle's centre, which must be at least
+  // 1.2 + 0.25 + 0.5: t >= 1.018 rad, so the first step that fits is 1.1 rad.
+  EXPECT_NEAR(std::abs(bearing), M_PI - 1.1, 1e-4);
+  // Closed round at 2 m (a ring of radius 2 about the target's start, less than the robot's clearance wide):
+  // no start fits.
+  Scenario ring;
+  for (int k = 0; k < 40; ++k) {
+    ObstacleSpec post;
+    post.center = Vec2(2.0 * std::cos(0.05 * M_PI * k), 3.0 + 2.0 * std::sin(0.05 * M_PI * k));
+    post.radius = 0.2;
+    ring.obstacles.push_back(post);
+  }
+  EXPECT_THROW(scenario_from_recorded_path(ring, samples, {}, "rec"), std::runtime_error);
   // A recording's nanosecond clock read as seconds: 10 s become 1e10 s, more than a million waypoints.
   auto nanoseconds = samples;
   for (TargetWaypoint& w : nanoseconds) w.time *= 1e9;

@@ -23,7 +23,8 @@ struct RecordedPathSettings {
   double period = 0.1;
   /// Where the robot starts (at rest). Unset: robot_distance behind the target's first position, opposite
   /// the way the target first moves, turned by up to 0.6 rad where that spot is taken, at least
-  /// robot_clearance from every obstacle and in sight of the target (the generator's rule).
+  /// robot_clearance from every obstacle and in sight of the target (the generator's rule); where none of
+  /// those fits, the first that does at the same distance turning further, 0.1 rad at a time, up to ahead.
   std::optional<core::Vec2> robot_start;
   double robot_distance = 2.0;   ///< m
   double robot_clearance = 0.5;  ///< m
