@@ -125,6 +125,12 @@ TEST(RecordedPath, TakesTheStretchAskedForAndKeepsSamplesWithPeriodZero) {
   EXPECT_EQ(s.target.back().time, 1.75);
   EXPECT_EQ(s.duration, 1.75);
 
+  // Kept as they are, times that differ by less than the shifted clock resolves are refused, not merged.
+  const std::vector<TargetWaypoint> close = {{-1e9, Vec2(0.0, 3.0)}, {1e-7, Vec2(1.0, 3.0)}, {1.5e-7, Vec2(2.0, 3.0)}};
+  RecordedPathSettings keep;
+  keep.period = 0.0;
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), close, keep, "rec"), std::runtime_error);
+
   settings.from = 200.0;
   settings.to = 300.0;
   EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, settings, "rec"), std::runtime_error);

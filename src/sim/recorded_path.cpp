@@ -102,7 +102,14 @@ core::Scenario scenario_from_recorded_path(const core::Scenario& world, const st
 
   std::vector<TargetWaypoint> path;
   if (settings.period == 0.0) {
-    for (const TargetWaypoint& w : stretch) path.push_back({w.time - t0, rounded(w.position, settings.decimals)});
+    for (const TargetWaypoint& w : stretch) {
+      // Shifted, two times far from the first can round to one (a clock at -1e9 s, samples 1e-7 s apart).
+      if (!path.empty() && !(w.time - t0 > path.back().time))
+        throw std::runtime_error("recorded path: two samples' times, " + std::to_string(w.time) +
+                                 " s and the one before, are too close to tell apart from the stretch's start; "
+                                 "resample (a period) instead");
+      path.push_back({w.time - t0, rounded(w.position, settings.decimals)});
+    }
   } else {
     if (!(span / settings.period <= kMaxWaypoints))
       throw std::runtime_error("recorded path: the stretch lasts " + std::to_string(span) + " s, more than " +
