@@ -127,7 +127,8 @@ std::string canonical_command(const GenerateOptions& o) {
   text += " --expert-samples " + std::to_string(o.expert_samples) + " --expert-iterations " +
           std::to_string(o.expert_iterations) + " --expert-settle " + number_text(o.expert_settle);
   const EpisodeCliOptions& e = o.episode;
-  text += " --target " + o.target + (e.planner_options.shield ? "" : " --no-shield");
+  if (o.scenarios.empty()) text += " --target " + o.target;  // the scenarios' own paths otherwise
+  text += e.planner_options.shield ? "" : " --no-shield";
   if (e.latency != "none") text += " --latency " + e.latency;
   if (e.tau != 0.0) text += " --tau " + number_text(e.tau);
   if (!e.beams.empty()) text += " --beams " + e.beams;
