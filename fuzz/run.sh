@@ -3,8 +3,8 @@
 # dictionary (fuzz/dict/NAME.dict). Exits non-zero when any target finds something (crash, sanitizer report,
 # leak, timeout, out of memory, or an exception outside its contract), and prints where the input was saved.
 #
-#   fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]     # targets: scenario target_path projection_case safetensors model_file
-#                                                   # dataset_file (default: all), SECONDS default 60
+#   fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]     # targets: scenario target_path projection_case safetensors
+#                                                   # model_file dataset_file (default: all), SECONDS default 60
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 build="${1:?usage: fuzz/run.sh BUILD_DIR [SECONDS] [TARGET...]}"

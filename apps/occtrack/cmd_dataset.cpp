@@ -11,7 +11,8 @@
 // Demonstrations for training (docs/learning.md, "Dataset file"): closed-loop episodes on generated worlds
 // whose seeds are outside the benchmark's 1000-1999, labelled by the offline Proj-CEM expert, written as one
 // safetensors file; or, with --scenarios, on scenario files (your own recorded target paths, made with
-// `scenario import`; a benchmark suite's folder is refused). `info` prints a file's metadata, tensor shapes and statistics; `merge` concatenates
+// `scenario import`; a benchmark suite's folder is refused). `info` prints a file's metadata, tensor shapes
+// and statistics; `merge` concatenates
 // files made with the same projection and perception settings (episode indices renumbered).
 //
 // `mpirun -n R occtrack dataset generate ...` shares the episodes among R ranks (docs/scaling.md,

@@ -349,8 +349,10 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   add_bounded_option(import, "--time-scale", io_->time_scale,
                      "Multiplies the time column to make seconds (1e-9 for nanoseconds)", 1e-12, 1e12);
-  import->add_option("--from", io_->from, "s, in the recording's clock (after --time-scale): the first sample used (default: the first)");
-  import->add_option("--to", io_->to, "s, in the recording's clock (after --time-scale): the last sample used (default: the last)");
+  import->add_option("--from", io_->from,
+                     "s, in the recording's clock (after --time-scale): the first sample used (default: the first)");
+  import->add_option("--to", io_->to,
+                     "s, in the recording's clock (after --time-scale): the last sample used (default: the last)");
   import->add_option("--period", io_->period,
                      "s between waypoints: the path is resampled by linear interpolation; 0 keeps every sample")
       ->check(CLI::Range(0.0, 60.0))

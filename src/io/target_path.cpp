@@ -30,7 +30,8 @@ std::vector<std::string_view> split_row(std::string_view row) {
     std::size_t start = 0;
     while (true) {
       const std::size_t comma = row.find(',', start);
-      fields.push_back(trim(row.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+      const std::size_t length = comma == std::string_view::npos ? std::string_view::npos : comma - start;
+      fields.push_back(trim(row.substr(start, length)));
       if (comma == std::string_view::npos) break;
       start = comma + 1;
     }

@@ -138,7 +138,9 @@ bool DemonstrationSettings::validate(std::string* error) const {
         << ", which meet the benchmark's seeds " << kBenchmarkSeedMin << "-" << kBenchmarkSeedMax
         << " (sim::is_benchmark_seed); training data must come from other worlds, e.g. first_seed 5000";
   } else if (auto bad = std::find_if(scenarios.begin(), scenarios.end(),
-                                     [](const core::Scenario& sc) { return sc.target.empty() || !(sc.duration > 0.0); });
+                                     [](const core::Scenario& sc) {
+                                       return sc.target.empty() || !(sc.duration > 0.0);
+                                     });
              bad != scenarios.end()) {
     why << "scenarios: '" << bad->name << "' has no target path or no duration";
   } else if (worlds.empty()) {
@@ -433,8 +435,8 @@ Demonstrations generate_demonstrations(const DemonstrationSettings& settings, De
       const std::uint64_t seed = demonstration_seed(settings, i);
       const DemonstrationWorld kind = settings.worlds[static_cast<std::size_t>(i % W)];
       const double speed = settings.target_speeds[static_cast<std::size_t>((i / W) % S)];
-      const core::Scenario* given =
-          settings.scenarios.empty() ? nullptr : &settings.scenarios[static_cast<std::size_t>(i) % settings.scenarios.size()];
+      const std::size_t N = settings.scenarios.size();
+      const core::Scenario* given = N == 0 ? nullptr : &settings.scenarios[static_cast<std::size_t>(i) % N];
       const std::string name =
           std::string("demo-") + (given ? given->name : std::string(to_string(kind))) + "-" + std::to_string(seed);
       try {

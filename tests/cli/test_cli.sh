@@ -442,7 +442,8 @@ else
   fail "dataset generate labels episodes on a given scenario" "rc $rc; $(tail_of "$tmp/out"); $(tail_of "$tmp/err")"
 fi
 run_tool dataset info "$tmp/mine.safetensors"
-if [ "$rc" -eq 0 ] && contains "$tmp/out" '"scenarios":["imported"]' && contains "$tmp/out" "--scenarios $tmp/imported.yaml"; then
+if [ "$rc" -eq 0 ] && contains "$tmp/out" '"scenarios":["imported"]' \
+   && contains "$tmp/out" "--scenarios $tmp/imported.yaml"; then
   pass "dataset info shows the scenarios a file was made on"
 else
   fail "dataset info shows the scenarios a file was made on" "rc $rc; $(tail_of "$tmp/out")"

@@ -37,8 +37,9 @@ struct RecordedPathSettings {
 struct RecordedPathReport {
   int samples_used = 0;             ///< recording samples within the stretch
   double top_speed = 0.0;           ///< m/s, between consecutive waypoints
-  /// s of the path (checked every 0.05 s, or duration / 1e6 when longer) during which the target's disk overlaps an obstacle (the recording
-  /// does not belong to this world, or its frame differs), and when that first happens (NaN: never).
+  /// s of the path (checked every 0.05 s, or duration / 1e6 when longer) during which the target's disk
+  /// overlaps an obstacle (the recording does not belong to this world, or its frame differs), and when that
+  /// first happens (NaN: never).
   double overlap_time = 0.0;
   double first_overlap = std::numeric_limits<double>::quiet_NaN();
   bool robot_sees_target = true;    ///< at t = 0 (a given robot_start need not)
@@ -51,7 +52,8 @@ struct RecordedPathReport {
 /// finite, times not strictly increasing, a coordinate beyond 1e6 m), and
 /// std::runtime_error when the stretch holds less than two waypoints or would make more than a million, when
 /// no robot start fits, or when a given one overlaps an obstacle.
-core::Scenario scenario_from_recorded_path(const core::Scenario& world, const std::vector<core::TargetWaypoint>& samples,
+core::Scenario scenario_from_recorded_path(const core::Scenario& world,
+                                           const std::vector<core::TargetWaypoint>& samples,
                                            const RecordedPathSettings& settings, const std::string& name,
                                            RecordedPathReport* report = nullptr);
 
