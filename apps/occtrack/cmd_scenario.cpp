@@ -13,18 +13,15 @@
 // scenario holds). Seeds 1000-1999 are the benchmark's (scenarios/README.md); training uses other seeds.
 // `import` makes one scenario of a recorded target path in a paper's world or a scenario file's world
 // (scenarios/README.md, "Your own recorded target paths").
-#include <charconv>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <optional>
-#include <string_view>
-#include <system_error>
 
 #include "cli_support.hpp"
 #include "commands.hpp"
+#include "episode_common.hpp"
 #include "occtrack/io/scenario.hpp"
 #include "occtrack/io/target_path.hpp"
 #include "occtrack/sim/paper_worlds.hpp"
@@ -219,15 +216,9 @@ std::vector<std::string> split_commas(const std::string& text) {
 std::optional<core::Vec2> parse_point(const std::string& text) {
   const std::vector<std::string> parts = split_commas(text);
   if (parts.size() != 2) return std::nullopt;
-  core::Vec2 p;
-  for (int k = 0; k < 2; ++k) {
-    std::string_view field(parts[k]);
-    if (!field.empty() && field.front() == '+') field.remove_prefix(1);
-    const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), p[k]);
-    if (field.empty() || error != std::errc() || end != field.data() + field.size() || !std::isfinite(p[k]))
-      return std::nullopt;
-  }
-  return p;
+  const std::optional<double> x = episode_cli::number(parts[0]), y = episode_cli::number(parts[1]);
+  if (!x || !y) return std::nullopt;
+  return core::Vec2(*x, *y);
 }
 
 // The world a recording is imported into: a paper's world by name, else a scenario file's obstacles, sensor

@@ -33,24 +33,6 @@ Vec2 position_at(const std::vector<TargetWaypoint>& samples, double t, std::size
   return a.position + alpha * (b.position - a.position);
 }
 
-// Where the generator's rule (behind the target, turned by up to 0.6 rad) finds no room, any bearing at the
-// same distance, nearest the rule's first: a recording may start beside a wall the generator would not start at.
-bool anywhere_around(generator::TargetChecks& checks, const std::vector<Vec2>& path, Vec2& robot) {
-  const Vec2 start = path.front();
-  double heading = 0.0;  // the way the target first moves, as place_robot takes it
-  for (const Vec2& p : path)
-    if ((p - start).norm() >= 0.5) {
-      heading = std::atan2(p.y() - start.y(), p.x() - start.x());
-      break;
-    }
-  for (int k = 7; k <= 31; ++k)  // 0.7 rad either side of straight behind, to straight ahead, in 0.1 rad steps
-    for (const double side : {1.0, -1.0}) {
-      robot = checks.robot_behind(start, heading + side * 0.1 * k);
-      if (checks.robot_fits(robot, start)) return true;
-    }
-  return false;
-}
-
 Vec2 rounded(const Vec2& p, int decimals) { return decimals > 0 ? generator::round_to(p, decimals) : p; }
 
 }  // namespace
@@ -151,8 +133,10 @@ core::Scenario scenario_from_recorded_path(const core::Scenario& world, const st
     std::vector<Vec2> positions;
     positions.reserve(path.size());
     for (const TargetWaypoint& w : path) positions.push_back(w.position);
+    // The generator's rule, turned further round where it finds no room (up to 3.1 rad, straight ahead): a
+    // recording may start beside a wall where the generator would not start.
     generator::TargetChecks checks(world, t);
-    if (!checks.place_robot(positions, 0.0, robot) && !anywhere_around(checks, positions, robot)) {
+    if (!checks.place_robot(positions, 0.0, robot, 3.1)) {
       char why[200];
       std::snprintf(why, sizeof why,
                     "recorded path: no robot start %g m from the target's first position (%g, %g) is %g m clear of "

@@ -96,17 +96,20 @@ bool TargetChecks::robot_fits(const Vec2& robot, const Vec2& target) {
          !world_.segment_blocked(robot, target, 0.0);
 }
 
-bool TargetChecks::place_robot(const std::vector<Vec2>& path, double heading, Vec2& robot) {
+bool TargetChecks::place_robot(const std::vector<Vec2>& path, double heading, Vec2& robot, double widest_turn) {
   const Vec2 start = path.front();
   for (const Vec2& p : path)
     if ((p - start).norm() >= 0.5) {
       heading = std::atan2(p.y() - start.y(), p.x() - start.x());
       break;
     }
-  for (const double turn : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5, -0.5, 0.6, -0.6}) {
-    robot = robot_behind(start, heading + turn);
-    if (robot_fits(robot, start)) return true;
-  }
+  // Turns 0, 0.1, -0.1, 0.2, -0.2, ... (k / 10.0 is the double of the literal 0.k, as the list this replaced).
+  for (int k = 0; k / 10.0 <= widest_turn + 1e-9; ++k)
+    for (const double turn : {k / 10.0, -k / 10.0}) {
+      if (k == 0 && turn < 0.0) continue;
+      robot = robot_behind(start, heading + turn);
+      if (robot_fits(robot, start)) return true;
+    }
   return false;
 }
 

@@ -45,9 +45,9 @@ class TargetChecks {
   /// Inside the area, clear of every obstacle by robot_clearance at t = 0, and seeing the target.
   bool robot_fits(const Vec2& robot, const Vec2& target);
   /// The robot's start robot_distance behind the target's start, opposite the way the target first moves
-  /// (its first point 0.5 m from the start, else `heading`), turned by up to 0.6 rad when that spot is taken;
-  /// false when none fits.
-  bool place_robot(const std::vector<Vec2>& path, double heading, Vec2& robot);
+  /// (its first point 0.5 m from the start, else `heading`), turned by 0.1 rad at a time, either way, up to
+  /// `widest_turn` rad when that spot is taken; false when none fits.
+  bool place_robot(const std::vector<Vec2>& path, double heading, Vec2& robot, double widest_turn = 0.6);
 
  private:
   const TargetSettings& t_;
