@@ -242,6 +242,10 @@ inline void add_episode_options(CLI::App* cmd, EpisodeCliOptions& o) {
   for (const auto& n : planners::planner_names()) names += (names.empty() ? "" : ", ") + n;
   cmd->add_option("--planner", o.planner, "Planner: " + names)->capture_default_str();
   cmd->add_option("--seed", o.planner_options.seed, "Planner's random seed")->capture_default_str();
+  cmd->add_option("--sensor-seed", o.sensor_seed,
+                  "Seed of the simulated sensors: LiDAR noise, beam dropout, target-estimate noise (every episode "
+                  "draws from it; a deterministic planner such as the follower differs between runs only by this)")
+      ->capture_default_str();
   cmd->add_option("--samples", o.planner_options.samples, "Proj-CEM samples per iteration (0: its default)")
       ->check(CLI::Range(0, 100000));
   add_bounded_option(cmd, "--threads", o.planner_options.threads, "Threads a planner may use (Proj-CEM's projection)",
