@@ -1,6 +1,7 @@
 // Fuzz target: recorded target paths (io::parse_target_path, a text table). What reads must hold finite,
 // strictly increasing samples; then sim::scenario_from_recorded_path makes a scenario of it (stretches up to
-// 600 s) in a world of one circle and one moving box, which must read back as a scenario file.
+// 600 s) in a world of one circle and one moving box, resampled in the world's frame and kept as recorded in a
+// frame the input's second byte picks, which must read back as a scenario file.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -57,6 +58,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const double period : {0.1, 0.0}) {
       sim::RecordedPathSettings settings;
       settings.period = period;
+      if (period == 0.0 && size > 1) {  // a frame from the second byte: turns up to a full turn, offsets to 1e6 m
+        settings.rotation = (data[1] % 64 - 32) * (2.0 * 3.141592653589793 / 32.0);
+        settings.offset = core::Vec2(data[1] % 3 == 0 ? 1e6 : 3.5, data[1] % 5 == 0 ? -1e6 : -2.0);
+      }
       core::Scenario scenario;
       bool made = false;
       try {

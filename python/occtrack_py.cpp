@@ -281,7 +281,8 @@ core::Scenario scenario_of(const py::object& scenario) {
 // overlaps obstacles or the robot's start does not see it.
 core::Scenario scenario_from_path(const py::object& world, const Array& path, double period,
                                   std::optional<double> from_time, std::optional<double> to_time,
-                                  std::optional<std::array<double, 2>> robot_start, const std::string& name) {
+                                  std::optional<std::array<double, 2>> robot_start,
+                                  std::optional<std::array<double, 3>> frame, const std::string& name) {
   if (path.ndim() != 2 || path.shape(1) != 3)
     throw std::invalid_argument("scenario_from_path: path must be an (N, 3) array of time, x, y");
   std::vector<core::TargetWaypoint> samples(static_cast<std::size_t>(path.shape(0)));
@@ -300,6 +301,10 @@ core::Scenario scenario_from_path(const py::object& world, const Array& path, do
   if (from_time) settings.from = *from_time;
   if (to_time) settings.to = *to_time;
   if (robot_start) settings.robot_start = core::Vec2((*robot_start)[0], (*robot_start)[1]);
+  if (frame) {
+    settings.offset = core::Vec2((*frame)[0], (*frame)[1]);
+    settings.rotation = (*frame)[2] * std::numbers::pi / 180.0;
+  }
   sim::RecordedPathReport report;
   core::Scenario s = sim::scenario_from_recorded_path(layout, samples, settings, name, &report);
   if (report.overlap_time > 0.0) {
@@ -441,12 +446,13 @@ PYBIND11_MODULE(_occtrack, m) {
         "A scenario from YAML text");
   m.def("scenario_from_path", &scenario_from_path, py::arg("world"), py::arg("path"), py::kw_only(),
         py::arg("period") = 0.1, py::arg("from_time") = py::none(), py::arg("to_time") = py::none(),
-        py::arg("robot_start") = py::none(), py::arg("name") = "recorded",
+        py::arg("robot_start") = py::none(), py::arg("frame") = py::none(), py::arg("name") = "recorded",
         "A scenario of a recorded target path ((N, 3) rows of time, x, y in the world's frame) in `world`: "
         "'six-wall', 'six-wall-sliding', 'random', a Scenario or a scenario file. As `occtrack scenario import`: "
         "the samples from from_time to to_time, from t = 0, resampled every `period` s (0: every sample), the "
-        "robot 2 m behind the target's start unless robot_start=(x, y); warns when the target overlaps "
-        "obstacles (scenarios/README.md, \"Your own recorded target paths\")");
+        "robot 2 m behind the target's start unless robot_start=(x, y); frame=(x, y, deg) places a path recorded "
+        "in another frame (a sample p at R(deg) p + (x, y)); warns when the target overlaps obstacles "
+        "(scenarios/README.md, \"Your own recorded target paths\")");
   m.def("suite_names", [] {
     std::vector<std::string> names;
     for (const auto& s : sim::benchmark_suites()) names.push_back(s.name);

@@ -149,6 +149,36 @@ TEST(RecordedPath, ReportsWhenTheTargetOverlapsAnObstacle) {
   EXPECT_NEAR(report.first_overlap, 3.8, 1e-9);
 }
 
+TEST(RecordedPath, PlacesARecordingMadeInAnotherFrame) {
+  // Along the recording's x axis at 1 m/s, through the circle when read in the world's frame (the test above).
+  // The recording's frame turned a quarter counter-clockwise with its origin at (-3, -5): the path runs up
+  // x = -3 from y = -5, clear of the circle, and the robot starts 2 m below it.
+  const auto samples = straight(0.0, 0.0, 0.0, 1.0, 10.0, 0.1);
+  RecordedPathSettings settings;
+  settings.rotation = std::acos(-1.0) / 2.0;
+  settings.offset = Vec2(-3.0, -5.0);
+  RecordedPathReport report;
+  const Scenario s = scenario_from_recorded_path(one_circle(), samples, settings, "rec", &report);
+  ASSERT_EQ(s.target.size(), 101u);
+  for (std::size_t k = 0; k < s.target.size(); ++k) {
+    EXPECT_EQ(s.target[k].position.x(), -3.0);  // cos(pi / 2) x is 6e-17 x, rounded away
+    EXPECT_NEAR(s.target[k].position.y(), -5.0 + 0.1 * k, 1e-4);
+  }
+  EXPECT_EQ(report.overlap_time, 0.0);
+  EXPECT_EQ(s.robot_position, Vec2(-3.0, -7.0));
+
+  RecordedPathSettings bad = settings;
+  bad.rotation = 7.0;  // beyond 2 pi
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, bad, "rec"), std::invalid_argument);
+  bad = settings;
+  bad.offset = Vec2(2e6, 0.0);
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, bad, "rec"), std::invalid_argument);
+  bad.offset = Vec2(0.0, NAN);
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, bad, "rec"), std::invalid_argument);
+  bad.offset = Vec2(0.0, 1e6);  // valid, but turned up +y, the samples at x > 0 land beyond 1e6 m in y
+  EXPECT_THROW(scenario_from_recorded_path(one_circle(), samples, bad, "rec"), std::invalid_argument);
+}
+
 TEST(RecordedPath, RefusesARobotStartInAnObstacleAndSaysWhenNoneFits) {
   const auto samples = straight(0.0, 0.0, 3.0, 1.0, 10.0, 0.1);
   RecordedPathSettings settings;

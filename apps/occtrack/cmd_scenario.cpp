@@ -5,7 +5,7 @@
 //                            [--target-speed V] [--duration D]
 // occtrack scenario import RECORDING --world six-wall|six-wall-sliding|random|WORLD.yaml --out FILE
 //                          [--columns T,X,Y] [--time-scale S] [--from T] [--to T] [--period DT]
-//                          [--robot-start=X,Y] [--name NAME]
+//                          [--robot-start=X,Y] [--frame=X,Y,DEG] [--name NAME]
 //
 // Writes the benchmark suites of shared/spec/simulation.md as scenario files (DIR/<suite>/<world>-<k>.yaml),
 // or one scenario of a freshly generated world. Each file written gets one line: its obstacles, the target's
@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numbers>
 #include <optional>
 
 #include "cli_support.hpp"
@@ -198,6 +199,7 @@ struct ImportOptions {
   std::optional<double> from, to;
   double period = 0.1;
   std::string robot_start;
+  std::string frame;
   std::string name;
 };
 
@@ -212,13 +214,17 @@ std::vector<std::string> split_commas(const std::string& text) {
   }
 }
 
-// "X,Y" as two finite numbers.
-std::optional<core::Vec2> parse_point(const std::string& text) {
+// "A,B,..." as exactly `count` finite numbers.
+std::optional<std::vector<double>> parse_numbers(const std::string& text, std::size_t count) {
   const std::vector<std::string> parts = split_commas(text);
-  if (parts.size() != 2) return std::nullopt;
-  const std::optional<double> x = episode_cli::number(parts[0]), y = episode_cli::number(parts[1]);
-  if (!x || !y) return std::nullopt;
-  return core::Vec2(*x, *y);
+  if (parts.size() != count) return std::nullopt;
+  std::vector<double> values;
+  for (const std::string& part : parts) {
+    const std::optional<double> v = episode_cli::number(part);
+    if (!v) return std::nullopt;
+    values.push_back(*v);
+  }
+  return values;
 }
 
 // The world a recording is imported into: a paper's world by name, else a scenario file's obstacles, sensor
@@ -238,13 +244,25 @@ int run_import(const ImportOptions& o) {
   }
   sim::RecordedPathSettings settings;
   if (!o.robot_start.empty()) {
-    settings.robot_start = parse_point(o.robot_start);
-    if (!settings.robot_start) {
+    const auto xy = parse_numbers(o.robot_start, 2);
+    if (!xy) {
       std::cerr << "occtrack scenario import: --robot-start: expected X,Y (two finite numbers; write "
                    "--robot-start=-1,2 when X is negative), got '"
                 << o.robot_start << "'\n";
       return kExitInputError;
     }
+    settings.robot_start = core::Vec2((*xy)[0], (*xy)[1]);
+  }
+  if (!o.frame.empty()) {
+    const auto frame = parse_numbers(o.frame, 3);
+    if (!frame || std::abs((*frame)[2]) > 360.0) {
+      std::cerr << "occtrack scenario import: --frame: expected X,Y,DEG (three finite numbers, DEG within "
+                   "[-360, 360]; write --frame=-1,2,90 when X is negative), got '"
+                << o.frame << "'\n";
+      return kExitInputError;
+    }
+    settings.offset = core::Vec2((*frame)[0], (*frame)[1]);
+    settings.rotation = (*frame)[2] * std::numbers::pi / 180.0;
   }
   if (o.from) settings.from = *o.from;
   if (o.to) settings.to = *o.to;
@@ -273,7 +291,7 @@ int run_import(const ImportOptions& o) {
   if (report.overlap_time > 0.0)
     std::cerr << "occtrack scenario import: warning: the target's disk (radius " << s.target_radius
               << " m) overlaps an obstacle for " << report.overlap_time << " s of the path, first at t = "
-              << report.first_overlap << " s: is the recording in this world's frame?\n";
+              << report.first_overlap << " s: is the recording in this world's frame (--frame)?\n";
   return kExitOk;
 }
 
@@ -326,9 +344,9 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
 
   auto [import, io_] = add_command<ImportOptions>(
       *scenario, "import",
-      "Make a scenario of a recorded target path (a CSV or whitespace table of time, x, y in the world's frame) "
-      "in a paper's world or a scenario file's world; the robot starts 2 m behind the target's first position "
-      "(scenarios/README.md, \"Your own recorded target paths\")");
+      "Make a scenario of a recorded target path (a CSV or whitespace table of time, x, y in the world's frame, "
+      "or --frame) in a paper's world or a scenario file's world; the robot starts 2 m behind the target's first "
+      "position (scenarios/README.md, \"Your own recorded target paths\")");
   import->add_option("recording", io_->recording, "The recorded path: one row per sample")->required();
   import->add_option("--world", io_->world,
                      "six-wall, six-wall-sliding or random (the paper's worlds), or a scenario file whose obstacles, "
@@ -351,6 +369,10 @@ void add_scenario_command(CLI::App& app, int& exit_code) {
   import->add_option("--robot-start", io_->robot_start,
                      "X,Y: where the robot starts (default: 2 m behind the target's first position, 0.5 m clear "
                      "of obstacles, in sight of the target)");
+  import->add_option("--frame", io_->frame,
+                     "X,Y,DEG: the recording's frame in the world's: its origin at (X, Y) m and its x axis turned "
+                     "DEG degrees counter-clockwise from the world's (a sample at p is placed at R(DEG) p + (X, Y); "
+                     "default: the recording is in the world's frame)");
   import->add_option("--name", io_->name, "The scenario's name (default: the output file's stem)");
   set_command_body(import, exit_code, [o = io_] { return run_import(*o); });
 }

@@ -177,6 +177,14 @@ def test_scenario_from_a_recorded_path():
         occtrack.scenario_from_path("six-wall", path[:, :2])
     with pytest.raises(ValueError, match="strictly increase"):
         occtrack.scenario_from_path("six-wall", path[::-1])
+    # The same path recorded in a frame whose origin is the world's (8, 0) and whose x axis points along +y.
+    recorded = np.stack([t, path[:, 2], np.zeros_like(t)], axis=1)
+    placed = occtrack.scenario_from_path("six-wall-sliding", recorded, frame=(8.0, 0.0, 90.0))
+    np.testing.assert_allclose(placed.target, s.target, atol=1e-9)
+    with pytest.warns(UserWarning, match="overlaps an obstacle"):
+        occtrack.scenario_from_path("six-wall-sliding", recorded)  # read in the world's frame: through walls
+    with pytest.raises(ValueError, match="rotation"):
+        occtrack.scenario_from_path("six-wall", path, frame=(0.0, 0.0, 400.0))
 
 
 def test_models_load_as_arrays():

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 #include "../core/settings_checker.hpp"
@@ -43,6 +44,9 @@ bool RecordedPathSettings::validate(std::string* error) const {
   c.require(from < to, "from (", from, ") must be less than to (", to, ")");
   c.require(period == 0.0 || (period >= 0.001 && period <= 60.0), "period (", period,
             ") must be 0 (keep every sample) or between 0.001 and 60 s");
+  c.require(std::abs(rotation) <= 2.0 * std::numbers::pi, "rotation (", rotation, " rad) must be within [-2 pi, 2 pi]");
+  c.require(offset.allFinite() && offset.cwiseAbs().maxCoeff() <= kMaxCoordinate, "offset (", offset.x(), ", ",
+            offset.y(), ") must be finite and within 1e6 m of the origin along each axis");
   if (robot_start) {
     c.finite(robot_start->x(), "robot_start.x");
     c.finite(robot_start->y(), "robot_start.y");
@@ -58,21 +62,30 @@ core::Scenario scenario_from_recorded_path(const core::Scenario& world, const st
                                            RecordedPathReport* report) {
   std::string error;
   if (!settings.validate(&error)) throw std::invalid_argument("recorded path: " + error);
-  for (std::size_t k = 0; k < samples.size(); ++k) {
-    if (!std::isfinite(samples[k].time) || !samples[k].position.allFinite())
+  // Into the world's frame, checked there: a far sample (or a far frame) would make coordinates the scenario
+  // file and the geometry do not hold.
+  const bool moved = settings.rotation != 0.0 || !settings.offset.isZero();
+  const double c = std::cos(settings.rotation), sn = std::sin(settings.rotation);
+  std::vector<TargetWaypoint> placed = samples;
+  for (std::size_t k = 0; k < placed.size(); ++k) {
+    TargetWaypoint& w = placed[k];
+    if (!std::isfinite(w.time) || !w.position.allFinite())
       throw std::invalid_argument("recorded path: sample " + std::to_string(k) + " is not finite");
-    if (!(samples[k].position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    if (moved) w.position = Vec2(c * w.position.x() - sn * w.position.y(), sn * w.position.x() + c * w.position.y()) +
+                            settings.offset;
+    if (!(w.position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
       throw std::invalid_argument("recorded path: sample " + std::to_string(k) + " lies more than " +
-                                  std::to_string(static_cast<long long>(kMaxCoordinate)) +
-                                  " m from the origin along an axis: is the position in metres, in the world's frame?");
-    if (k > 0 && !(samples[k].time > samples[k - 1].time))
+                                  std::to_string(static_cast<long long>(kMaxCoordinate)) + " m from the origin " +
+                                  "along an axis" + (moved ? " once placed by the frame" : "") +
+                                  ": is the position in metres, in the world's frame?");
+    if (k > 0 && !(w.time > placed[k - 1].time))
       throw std::invalid_argument("recorded path: times must strictly increase (sample " + std::to_string(k) + ")");
   }
 
   // The stretch: the samples within [from, to].
-  const auto first = std::lower_bound(samples.begin(), samples.end(), settings.from,
+  const auto first = std::lower_bound(placed.cbegin(), placed.cend(), settings.from,
                                       [](const TargetWaypoint& w, double t) { return w.time < t; });
-  const auto last = std::upper_bound(samples.begin(), samples.end(), settings.to,
+  const auto last = std::upper_bound(placed.cbegin(), placed.cend(), settings.to,
                                      [](double t, const TargetWaypoint& w) { return t < w.time; });
   const std::vector<TargetWaypoint> stretch(first, std::max(first, last));
   if (stretch.size() < 2)

@@ -409,6 +409,26 @@ if [ "$rc" -eq 0 ] && contains "$tmp/out" "collisions"; then
 else
   fail "run runs an imported scenario" "rc $rc; $(tail_of "$tmp/err")"
 fi
+# The same path recorded in an odometry-like frame: origin at the world's (8, -5), x axis along the world's +y.
+python3 - "$tmp/odom.csv" <<'PY'
+import sys
+with open(sys.argv[1], "w") as f:
+    for i in range(1001):
+        f.write("%.2f,%.4f,0\n" % (i * 0.01, i * 0.01))
+PY
+run_tool scenario import "$tmp/odom.csv" --world six-wall --out "$tmp/odom.yaml" --frame=8,-5,90 --name imported
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/odom.yaml" "$tmp/imported.yaml" && ! contains "$tmp/err" "warning"; then
+  pass "scenario import --frame places a recording made in another frame"
+else
+  fail "scenario import --frame places a recording made in another frame" \
+    "rc $rc; $(diff "$tmp/odom.yaml" "$tmp/imported.yaml" | head -5); $(tail_of "$tmp/err")"
+fi
+run_tool scenario import "$tmp/odom.csv" --world six-wall --out "$tmp/refused.yaml" --frame=8,-5
+if [ "$rc" -eq 1 ] && contains "$tmp/err" "--frame: expected X,Y,DEG" && [ ! -e "$tmp/refused.yaml" ]; then
+  pass "scenario import refuses a --frame without its angle"
+else
+  fail "scenario import refuses a --frame without its angle" "rc $rc; $(tail_of "$tmp/err")"
+fi
 printf '0 8 -5\n1 8 -4\n1 8 -3\n' > "$tmp/repeated_time.txt"
 run_tool scenario import "$tmp/repeated_time.txt" --world six-wall --out "$tmp/refused.yaml"
 if [ "$rc" -eq 1 ] && contains "$tmp/err" "repeated_time.txt: line 3: times must strictly increase" \

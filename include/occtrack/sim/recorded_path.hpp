@@ -21,6 +21,11 @@ struct RecordedPathSettings {
   /// use 0.1 s). 0 keeps every sample (a 100 Hz recording's position noise then reaches the target's
   /// observed velocity undamped).
   double period = 0.1;
+  /// The recording's frame in the world's: a sample at p is placed at R(rotation) p + offset (rotation in
+  /// rad, counter-clockwise; offset in m). For a recording made in another frame, e.g. a robot's odometry
+  /// frame whose origin and heading in the world are known. Applied before anything else.
+  double rotation = 0.0;
+  core::Vec2 offset = core::Vec2::Zero();
   /// Where the robot starts (at rest). Unset: robot_distance behind the target's first position, opposite
   /// the way the target first moves, turned by up to 0.6 rad where that spot is taken, at least
   /// robot_clearance from every obstacle and in sight of the target (the generator's rule); where none of
@@ -49,7 +54,7 @@ struct RecordedPathReport {
 /// The scenario: `world`'s obstacles, sensor and radii, `samples` (times strictly increasing, any origin)
 /// within the settings' stretch as the target's path from t = 0, the duration its last waypoint's time, the
 /// robot as the settings say, named `name`. Throws std::invalid_argument for invalid settings or samples (not
-/// finite, times not strictly increasing, a coordinate beyond 1e6 m), and
+/// finite, times not strictly increasing, a coordinate beyond 1e6 m once placed by the frame), and
 /// std::runtime_error when the stretch holds less than two waypoints or would make more than a million, when
 /// no robot start fits, or when a given one overlaps an obstacle.
 core::Scenario scenario_from_recorded_path(const core::Scenario& world,
