@@ -263,6 +263,8 @@ TEST(Demonstrations, GivenScenariosAreDrivenInTurnForAtMostTheDuration) {
   EXPECT_TRUE(target_seen(2).isApprox(Eigen::Vector2d(2.0, 0.0), 1e-6));
   const auto generator = nlohmann::json::parse(data.metadata.at("generator"));
   EXPECT_EQ(generator.at("scenarios"), nlohmann::json({"short", "long"}));
+  for (const char* unused : {"world_kinds", "target", "target_speeds"})
+    EXPECT_FALSE(generator.contains(unused)) << unused << ": the generated worlds' settings, unused";
   // A scenario without a target path is refused by name.
   settings.scenarios[1].target.clear();
   std::string error;

@@ -256,11 +256,14 @@ std::map<std::string, std::string> demonstration_metadata(const DemonstrationSet
                        {"target_noise", {s.episode.target_position_noise, s.episode.target_velocity_noise}},
                        {"driver_shield", s.driver != "expert" && s.driver_options.shield},
                        {"response_time", s.driver_options.response_time}};
-  // Named only when given, so that a file of generated episodes keeps the bytes it had before the option.
+  // Named only when given, so that a file of generated episodes keeps the bytes it had before the option; the
+  // generated worlds' kinds, target model and speeds are then unused and left out, so that the provenance
+  // says only what made the rows.
   if (!s.scenarios.empty()) {
     json names = json::array();
     for (const core::Scenario& sc : s.scenarios) names.push_back(sc.name);
     generator["scenarios"] = names;
+    for (const char* unused : {"world_kinds", "target", "target_speeds"}) generator.erase(unused);
   }
   return {{"format", io::kDatasetFormat},
           {"projection", io::projection_settings_json(s.expert.projection)},
