@@ -142,6 +142,9 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       "target estimate: Gaussian noise " + episode_cli::show(episode.target_position_noise) + " m on position, " +
           episode_cli::show(episode.target_velocity_noise) + " m/s on velocity; target_observation " +
           v2.target_observation,
+      "seeds: planner " + std::to_string(planner.seed) + ", sensors " + std::to_string(episode.seed) +
+          " (one draw of each for every row; other draws, `bench suite --seed S --sensor-seed S`, move a suite's "
+          "time hidden, most on the dynamic suites: docs/results.md)",
       std::string("safety layer: ") +
           (planner.shield ? "on" : "off (the planners alone, as in the paper; docs/safety.md)") +
           "; target predictor: " + (planner.predictor ? "on" : "off"),

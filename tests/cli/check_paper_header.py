@@ -25,6 +25,7 @@ for run in d["runs"]:
                  f"LiDAR: {e['beams']} beams, Gaussian range noise sigma {e['lidar_noise_m']:g} m",
                  f"Gaussian noise {e['target_position_noise_m']:g} m on position, "
                  f"{e['target_velocity_noise_m_s']:g} m/s on velocity; target_observation {e['target_observation']}",
+                 f"seeds: planner {p['seed']}, sensors {e['sensor_seed']} (one draw of each",
                  "safety layer: " + ("on" if p["shield"] else "off"),
                  "target predictor: " + ("on" if p["predictor"] else "off")):
         check(text in header, f"the header does not say '{text}':\n{header}")
