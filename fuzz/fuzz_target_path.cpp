@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -59,7 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       sim::RecordedPathSettings settings;
       settings.period = period;
       if (period == 0.0 && size > 1) {  // a frame from the second byte: turns up to a full turn, offsets to 1e6 m
-        settings.rotation = (data[1] % 64 - 32) * (2.0 * 3.141592653589793 / 32.0);
+        settings.rotation = (data[1] % 64 - 32) * (2.0 * std::numbers::pi / 32.0);
         settings.offset = core::Vec2(data[1] % 3 == 0 ? 1e6 : 3.5, data[1] % 5 == 0 ? -1e6 : -2.0);
       }
       core::Scenario scenario;

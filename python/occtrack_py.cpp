@@ -302,6 +302,9 @@ core::Scenario scenario_from_path(const py::object& world, const Array& path, do
   if (to_time) settings.to = *to_time;
   if (robot_start) settings.robot_start = core::Vec2((*robot_start)[0], (*robot_start)[1]);
   if (frame) {
+    if (!(std::abs((*frame)[2]) <= 360.0))  // the settings' own check would speak of radians
+      throw std::invalid_argument("scenario_from_path: frame's angle (" + std::to_string((*frame)[2]) +
+                                  " degrees) must be within [-360, 360]");
     settings.offset = core::Vec2((*frame)[0], (*frame)[1]);
     settings.rotation = (*frame)[2] * std::numbers::pi / 180.0;
   }

@@ -183,8 +183,10 @@ def test_scenario_from_a_recorded_path():
     np.testing.assert_allclose(placed.target, s.target, atol=1e-9)
     with pytest.warns(UserWarning, match="overlaps an obstacle"):
         occtrack.scenario_from_path("six-wall-sliding", recorded)  # read in the world's frame: through walls
-    with pytest.raises(ValueError, match="rotation"):
+    with pytest.raises(ValueError, match=r"angle \(400.000000 degrees\) must be within \[-360, 360\]"):
         occtrack.scenario_from_path("six-wall", path, frame=(0.0, 0.0, 400.0))
+    with pytest.raises(ValueError, match="offset"):
+        occtrack.scenario_from_path("six-wall", path, frame=(2e6, 0.0, 0.0))
 
 
 def test_models_load_as_arrays():
