@@ -106,9 +106,9 @@ bool TargetChecks::place_robot(const std::vector<Vec2>& path, double heading, Ve
   // Turns 0, 0.1, -0.1, 0.2, -0.2, ... (k / 10.0 is the double of the literal 0.k, as the list this replaced).
   for (int k = 0; k / 10.0 <= widest_turn + 1e-9; ++k)
     for (const double turn : {k / 10.0, -k / 10.0}) {
-      if (k == 0 && turn < 0.0) continue;
       robot = robot_behind(start, heading + turn);
       if (robot_fits(robot, start)) return true;
+      if (k == 0) break;
     }
   return false;
 }
