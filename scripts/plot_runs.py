@@ -3,7 +3,8 @@
 
 Usage: scripts/plot_runs.py --out FILE.svg [--title T] LABEL=FILE.json[,FILE.json...] [LABEL=... ...]
 
-Each FILE.json is what `occtrack bench suite --json` writes. For every suite that the files hold (in the
+Each FILE.json is what `occtrack bench suite --json` writes; one written with --sensor-seeds counts as one
+run per noise draw it holds. For every suite that the files hold (in the
 order first met), the plot has a group; in it, each label has a column with one dot per run (the time the
 target was hidden, summed over the run's episodes) and a bar at the mean. Runs that differ only in the
 planner's seed show how much one run says; a label whose dots sit apart from another's differs beyond luck.
@@ -34,10 +35,11 @@ def read_runs(spec):
         try:
             with open(path, encoding="utf-8") as f:
                 d = json.load(f)
-            episodes = d["episodes"]
-            hidden = sum(float(e["occlusion_time_s"]) for e in episodes)
-            collisions = sum(int(e["collisions"]) for e in episodes)
-            runs.append((d["suite"], hidden, collisions))
+            for run in d["draws"] if "draws" in d else [d]:
+                episodes = run["episodes"]
+                hidden = sum(float(e["occlusion_time_s"]) for e in episodes)
+                collisions = sum(int(e["collisions"]) for e in episodes)
+                runs.append((run["suite"], hidden, collisions))
         except (OSError, ValueError, KeyError, TypeError) as e:
             sys.exit(f"plot_runs.py: {path}: not a `bench suite --json` file ({e})")
     return label, runs

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -124,6 +126,66 @@ TEST(Metrics, EmptySuite) {
   EXPECT_EQ(r.success_rate, 0.0);
   EXPECT_EQ(r.summary.duration_s, 0.0);
   EXPECT_EQ(r.summary.scenario, "suite");
+}
+
+// A suite over three sensor draws whose totals are 1, 2 and 6 s: mean 3, sample sd sqrt(((1-3)^2 + (2-3)^2 +
+// (6-3)^2) / 2) = sqrt(7), least at the first draw's seed, largest at the third's; collisions in one draw.
+TEST(Metrics, DrawsSpreadOverSensorSeeds) {
+  auto draw = [](double hidden, int collisions, double clearance, double longest) {
+    EpisodeMetrics a, b;
+    a.duration_s = b.duration_s = 10.0;
+    a.occlusion_time_s = hidden / 2;
+    b.occlusion_time_s = hidden / 2;
+    a.success = b.success = hidden == 0.0;
+    a.collisions = collisions;
+    a.min_clearance_m = clearance;
+    b.min_clearance_m = 0.5;
+    a.longest_occlusion_s = longest;
+    b.beyond_envelope_cycles = 2;
+    return sim::summarize_suite("suite", "planner", {a, b});
+  };
+  const std::vector<std::uint64_t> seeds = {7, 3, 11};
+  const auto r = sim::summarize_draws(seeds, {draw(1.0, 0, 0.3, 0.5), draw(2.0, 2, -0.05, 1.0), draw(6.0, 0, 0.2, 4.0)});
+  EXPECT_EQ(r.suite, "suite");
+  EXPECT_EQ(r.draws.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.occlusion_time_s.mean, 3.0);
+  EXPECT_DOUBLE_EQ(r.occlusion_time_s.sd, std::sqrt(7.0));
+  EXPECT_DOUBLE_EQ(r.occlusion_time_s.min, 1.0);
+  EXPECT_DOUBLE_EQ(r.occlusion_time_s.max, 6.0);
+  EXPECT_EQ(r.occlusion_time_s.min_at, 0u);
+  EXPECT_EQ(r.occlusion_time_s.max_at, 2u);
+  EXPECT_DOUBLE_EQ(r.longest_occlusion_s.mean, 5.5 / 3);
+  EXPECT_DOUBLE_EQ(r.collisions.mean, 2.0 / 3);
+  EXPECT_EQ(r.collisions.max_at, 1u);
+  EXPECT_EQ(r.draws_with_collision, 1);
+  EXPECT_DOUBLE_EQ(r.min_clearance_m, -0.05);
+  EXPECT_EQ(r.beyond_envelope_cycles, 6);
+  EXPECT_DOUBLE_EQ(r.success_rate.sd, 0.0);  // no draw has a successful episode
+
+  const auto j = nlohmann::json::parse(io::draws_json(r));
+  EXPECT_EQ(j["sensor_seeds"], nlohmann::json({7, 3, 11}));
+  ASSERT_EQ(j["draws"].size(), 3u);
+  EXPECT_EQ(j["draws"][1]["sensor_seed"], 3);
+  EXPECT_EQ(j["draws"][1]["summary"]["collisions"], 2);
+  EXPECT_EQ(j["over_draws"]["occlusion_time_s"]["min_seed"], 7);  // seeds, not indices
+  EXPECT_EQ(j["over_draws"]["occlusion_time_s"]["max_seed"], 11);
+  EXPECT_EQ(j["over_draws"]["draws_with_collision"], 1);
+  const std::string table = io::draws_table(r);
+  EXPECT_NE(table.find("over 3 sensor draws"), std::string::npos);
+  EXPECT_NE(table.find("3.0 / 2.6 / 1.0 (7) / 6.0 (11)"), std::string::npos) << table;
+  EXPECT_NE(table.find("1 of 3 draws; least clearance -0.050 m"), std::string::npos) << table;
+
+  // One draw: no spread.
+  const auto one = sim::summarize_draws({5}, {draw(2.0, 0, 0.3, 1.0)});
+  EXPECT_DOUBLE_EQ(one.occlusion_time_s.sd, 0.0);
+  EXPECT_DOUBLE_EQ(one.occlusion_time_s.mean, 2.0);
+
+  EXPECT_THROW(sim::summarize_draws({}, {}), std::invalid_argument);
+  EXPECT_THROW(sim::summarize_draws({1, 2}, {draw(1.0, 0, 0.3, 0.5)}), std::invalid_argument);
+  EXPECT_THROW(sim::summarize_draws({4, 4}, {draw(1.0, 0, 0.3, 0.5), draw(1.0, 0, 0.3, 0.5)}), std::invalid_argument);
+  auto other = draw(1.0, 0, 0.3, 0.5);
+  other.planner = "another";
+  EXPECT_THROW(sim::summarize_draws({1, 2}, {draw(1.0, 0, 0.3, 0.5), other}), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,16 +1,22 @@
 // occtrack bench suite SUITE --planner NAME [--jobs J] [--json FILE] [--svg-dir DIR] [--html-dir DIR]
-//                       [episode options]
+//                       [--sensor-seeds LIST] [episode options]
 //
 // Runs every scenario of a suite (a folder of YAML files, or a name under scenarios/) with a planner, J
-// episodes at a time (suite_runner.hpp), and prints the paper-style table. Each episode's planner runs
+// episodes at a time (suite_runner.hpp), and prints the paper-style table. With --sensor-seeds it runs the
+// suite once per seed of the simulated sensors and prints how the figures spread over those noise draws. Each episode's planner runs
 // single-threaded unless --threads says otherwise, so that computation times stay comparable. `--latency auto`
 // is measured once, before the episodes, and held fixed for all of them.
+#include <cstdint>
 #include <iostream>
+#include <set>
+#include <stdexcept>
+#include <vector>
 
 #include "cli_support.hpp"
 #include "commands.hpp"
 #include "episode_common.hpp"
 #include "occtrack/io/results.hpp"
+#include "occtrack/sim/metrics.hpp"
 #include "run_settings.hpp"
 #include "suite_runner.hpp"
 
@@ -20,9 +26,76 @@ namespace {
 
 struct SuiteOptions {
   std::string suite, json_path, svg_dir, html_dir;
+  std::string sensor_seeds;  ///< empty: one run at --sensor-seed
   int jobs = 1;
   EpisodeCliOptions episode;
 };
+
+constexpr std::size_t kMaxDraws = 1000;
+
+std::uint64_t seed_number(const std::string& text) {
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19)
+    throw std::invalid_argument("\"" + text + "\" is not a seed (an integer >= 0 of at most 19 digits)");
+  return std::stoull(text);
+}
+
+/// "1-10", "1,4,7", "2-4,9": the seeds in the order written. Throws std::invalid_argument with the rule broken.
+std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
+  std::vector<std::uint64_t> seeds;
+  std::set<std::uint64_t> seen;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, comma - begin);
+    const std::size_t dash = item.find('-');
+    const std::uint64_t first = seed_number(item.substr(0, dash));
+    const std::uint64_t last = dash == std::string::npos ? first : seed_number(item.substr(dash + 1));
+    if (last < first) throw std::invalid_argument("the range " + item + " runs backwards");
+    if (last - first >= kMaxDraws) throw std::invalid_argument("more than " + std::to_string(kMaxDraws) + " seeds");
+    for (std::uint64_t s = first;; ++s) {
+      if (!seen.insert(s).second) throw std::invalid_argument("seed " + std::to_string(s) + " is given twice");
+      seeds.push_back(s);
+      if (seeds.size() > kMaxDraws)
+        throw std::invalid_argument("more than " + std::to_string(kMaxDraws) + " seeds");
+      if (s == last) break;
+    }
+    begin = comma + 1;
+  }
+  return seeds;
+}
+
+std::string seed_list_rule(const std::string& text) {
+  try {
+    parse_seed_list(text);
+    return "";
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+}
+
+int run_draws(const SuiteOptions& o, const Suite& suite, SuiteRunOptions run) {
+  const std::vector<std::uint64_t> seeds = parse_seed_list(o.sensor_seeds);
+  std::cout << run_settings_line(run.planner, run.planner_options, run.settings, seeds) << std::endl;
+  const std::string svg_dir = run.svg_dir, html_dir = run.html_dir;
+  std::vector<core::SuiteResult> draws;
+  for (const std::uint64_t seed : seeds) {
+    run.settings.seed = seed;
+    run.progress_label = "sensor seed " + std::to_string(seed) + " ";
+    // One folder of figures and replays per draw, so that the draws do not overwrite each other's.
+    if (!svg_dir.empty()) run.svg_dir = svg_dir + "/sensor-seed-" + std::to_string(seed);
+    if (!html_dir.empty()) run.html_dir = html_dir + "/sensor-seed-" + std::to_string(seed);
+    draws.push_back(run_suite(suite, run));
+    warn_seen_beyond_the_envelope(draws.back().summary, run.planner_options);
+  }
+  const core::DrawsResult result = sim::summarize_draws(seeds, draws);
+  std::cout << io::draws_table(result);
+  if (!o.json_path.empty() &&
+      !write_text_file("occtrack bench suite", o.json_path,
+                       results_with_settings(io::draws_json(result), "bench suite", run.planner, run.planner_options,
+                                             run.settings, seeds)))
+    return kExitInputError;
+  return kExitOk;
+}
 
 int run(const SuiteOptions& o) {
   const Suite suite = load_suite(o.suite);                                // refuse bad files up front
@@ -34,6 +107,7 @@ int run(const SuiteOptions& o) {
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;
   run.html_dir = o.html_dir;
+  if (!o.sensor_seeds.empty()) return run_draws(o, suite, run);
   std::cout << run_settings_line(run.planner, run.planner_options, run.settings) << "\n";
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
@@ -53,6 +127,11 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
       add_command<SuiteOptions>(bench, "suite", "Run a benchmark suite with a planner and print the paper's table");
   cmd->add_option("suite", o->suite, "Suite folder, or a name under scenarios/ (e.g. static-1ms)")->required();
   add_episode_options(cmd, o->episode);
+  cmd->add_option("--sensor-seeds", o->sensor_seeds,
+                  "Run the suite once per sensor seed (LIST: 1-10, 1,4,7 or 2-4,9) and print how its figures spread "
+                  "over these noise draws (mean, sd, least, largest); --json then holds every draw")
+      ->check(episode_cli::validator(seed_list_rule, "LIST"))
+      ->excludes(cmd->get_option("--sensor-seed"));
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
   cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary, settings, created_by} as JSON");
   cmd->add_option("--svg-dir", o->svg_dir, "Write one figure per episode into this folder");

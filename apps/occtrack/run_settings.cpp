@@ -20,7 +20,7 @@ const char* observation_name(sim::TargetObservation o) {
 }  // namespace
 
 nlohmann::json run_settings_json(const std::string& planner, const planners::PlannerOptions& p,
-                                 const sim::EpisodeSettings& e) {
+                                 const sim::EpisodeSettings& e, const std::vector<std::uint64_t>& sensor_seeds) {
   nlohmann::json j;
   j["planner"] = {{"name", planner},
                   {"seed", p.seed},
@@ -58,20 +58,25 @@ nlohmann::json run_settings_json(const std::string& planner, const planners::Pla
                   {"physics_step_s", e.physics_step},
                   {"planning_period_s", e.planning_period},
                   {"robot_accel_max", e.robot_accel_max}};
+  if (!sensor_seeds.empty()) {
+    j["episode"]["sensor_seed"] = nullptr;
+    j["episode"]["sensor_seeds"] = sensor_seeds;
+  }
   return j;
 }
 
 std::string results_with_settings(const std::string& results_json, const std::string& command,
                                   const std::string& planner, const planners::PlannerOptions& options,
-                                  const sim::EpisodeSettings& episode) {
+                                  const sim::EpisodeSettings& episode,
+                                  const std::vector<std::uint64_t>& sensor_seeds) {
   nlohmann::json j = nlohmann::json::parse(results_json);
   j["created_by"] = created_by(command);
-  j["settings"] = run_settings_json(planner, options, episode);
+  j["settings"] = run_settings_json(planner, options, episode, sensor_seeds);
   return j.dump(2) + "\n";
 }
 
 std::string run_settings_line(const std::string& planner, const planners::PlannerOptions& p,
-                              const sim::EpisodeSettings& e) {
+                              const sim::EpisodeSettings& e, const std::vector<std::uint64_t>& sensor_seeds) {
   std::ostringstream s;
   s << "settings: planner " << planner << " (seed " << p.seed << "), shield " << (p.shield ? "on" : "off")
     << ", predictor " << (p.predictor ? "on" : "off") << ", " << planners::describe_ranking_and_layer(planner, p);
@@ -87,7 +92,13 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
   s << ", beam dropout ";
   if (e.beam_dropout) s << *e.beam_dropout; else s << "the scenario's";
   s << ", target noise " << e.target_position_noise << " m / " << e.target_velocity_noise
-    << " m/s, target observation " << observation_name(e.target_observation) << ", sensor seed " << e.seed;
+    << " m/s, target observation " << observation_name(e.target_observation);
+  if (sensor_seeds.empty()) {
+    s << ", sensor seed " << e.seed;
+  } else {
+    s << ", sensor seeds";
+    for (std::size_t i = 0; i < sensor_seeds.size(); ++i) s << (i ? "," : " ") << sensor_seeds[i];
+  }
   return s.str();
 }
 

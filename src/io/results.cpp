@@ -1,7 +1,10 @@
 #include "occtrack/io/results.hpp"
 
 #include <cmath>
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 namespace occtrack::io {
@@ -53,19 +56,48 @@ json metrics_object(const core::EpisodeMetrics& m, bool summary, double success_
   return j;
 }
 
-}  // namespace
-
-std::string episode_json(const core::EpisodeMetrics& metrics, int indent) {
-  return metrics_object(metrics, false, 0.0).dump(indent);
-}
-
-std::string suite_json(const core::SuiteResult& result, int indent) {
+json suite_object(const core::SuiteResult& result) {
   json j;
   j["suite"] = result.suite;
   j["planner"] = result.planner;
   j["episodes"] = json::array();
   for (const auto& e : result.episodes) j["episodes"].push_back(metrics_object(e, false, 0.0));
   j["summary"] = metrics_object(result.summary, true, result.success_rate);
+  return j;
+}
+
+json spread_object(const core::Spread& s, const std::vector<std::uint64_t>& seeds) {
+  return {{"mean", s.mean}, {"sd", s.sd}, {"min", s.min}, {"max", s.max},
+          {"min_seed", seeds.at(s.min_at)}, {"max_seed", seeds.at(s.max_at)}};
+}
+
+}  // namespace
+
+std::string episode_json(const core::EpisodeMetrics& metrics, int indent) {
+  return metrics_object(metrics, false, 0.0).dump(indent);
+}
+
+std::string suite_json(const core::SuiteResult& result, int indent) { return suite_object(result).dump(indent); }
+
+std::string draws_json(const core::DrawsResult& r, int indent) {
+  json j;
+  j["suite"] = r.suite;
+  j["planner"] = r.planner;
+  j["sensor_seeds"] = r.sensor_seeds;
+  j["draws"] = json::array();
+  for (std::size_t i = 0; i < r.draws.size(); ++i) {
+    json d = suite_object(r.draws[i]);
+    d["sensor_seed"] = r.sensor_seeds.at(i);
+    j["draws"].push_back(std::move(d));
+  }
+  j["over_draws"] = {{"draws", r.draws.size()},
+                     {"occlusion_time_s", spread_object(r.occlusion_time_s, r.sensor_seeds)},
+                     {"success_rate", spread_object(r.success_rate, r.sensor_seeds)},
+                     {"longest_occlusion_s", spread_object(r.longest_occlusion_s, r.sensor_seeds)},
+                     {"collisions", spread_object(r.collisions, r.sensor_seeds)},
+                     {"draws_with_collision", r.draws_with_collision},
+                     {"min_clearance_m", finite_or_zero(r.min_clearance_m)},
+                     {"beyond_envelope_cycles", r.beyond_envelope_cycles}};
   return j.dump(indent);
 }
 
@@ -91,6 +123,44 @@ std::string suite_table(const std::vector<core::SuiteResult>& results) {
                   100.0 * s.tracking_in_band_share);
     out += line;
   }
+  return out;
+}
+
+std::string draws_table(const core::DrawsResult& r) {
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line, "| %-16s | %-14s | %-11s | %-28s | %-17s | %10s | %-19s |\n", "suite", "planner",
+                "sensor seed", "occlusion time (s) / success", "longest spell (s)", "collisions", "least clearance (m)");
+  out += line;
+  out += "|------------------|----------------|-------------|------------------------------|-------------------|"
+         "------------|---------------------|\n";
+  for (std::size_t i = 0; i < r.draws.size(); ++i) {
+    const auto& d = r.draws[i];
+    double clearance = std::numeric_limits<double>::infinity();
+    for (const auto& e : d.episodes) clearance = std::min(clearance, e.min_clearance_m);
+    char occlusion[64];
+    std::snprintf(occlusion, sizeof occlusion, "%.1f / %.2f", d.summary.occlusion_time_s, d.success_rate);
+    std::snprintf(line, sizeof line, "| %-16s | %-14s | %11llu | %-28s | %17.1f | %10d | %19.3f |\n",
+                  d.suite.c_str(), d.planner.c_str(), static_cast<unsigned long long>(r.sensor_seeds.at(i)),
+                  occlusion, d.summary.longest_occlusion_s, d.summary.collisions, finite_or_zero(clearance));
+    out += line;
+  }
+  std::snprintf(line, sizeof line, "\nover %zu sensor draws (mean / sd / least (seed) / largest (seed)):\n",
+                r.draws.size());
+  out += line;
+  auto row = [&](const char* name, const core::Spread& s, int decimals) {
+    std::snprintf(line, sizeof line, "  %-22s %.*f / %.*f / %.*f (%llu) / %.*f (%llu)\n", name, decimals, s.mean,
+                  decimals, s.sd, decimals, s.min, static_cast<unsigned long long>(r.sensor_seeds.at(s.min_at)),
+                  decimals, s.max, static_cast<unsigned long long>(r.sensor_seeds.at(s.max_at)));
+    out += line;
+  };
+  row("occlusion time (s)", r.occlusion_time_s, 1);
+  row("success rate", r.success_rate, 2);
+  row("longest spell (s)", r.longest_occlusion_s, 1);
+  row("collisions", r.collisions, 1);
+  std::snprintf(line, sizeof line, "  %-22s %d of %zu draws; least clearance %.3f m\n", "with a collision",
+                r.draws_with_collision, r.draws.size(), finite_or_zero(r.min_clearance_m));
+  out += line;
   return out;
 }
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
+#include <stdexcept>
 #include <utility>
 
 namespace occtrack::sim {
@@ -137,6 +139,62 @@ core::SuiteResult summarize_suite(const std::string& suite, const std::string& p
   s.compute_ms.median = core::summarize_timings(std::move(medians)).median;
   r.success_rate = double(successes) / episodes.size();
   s.success = successes == static_cast<int>(episodes.size());
+  return r;
+}
+
+namespace {
+
+template <typename Figure>
+core::Spread spread_of(const std::vector<core::SuiteResult>& draws, Figure figure) {
+  core::Spread s;
+  const std::size_t n = draws.size();
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = figure(draws[i]);
+  s.min_at = static_cast<std::size_t>(std::min_element(x.begin(), x.end()) - x.begin());
+  s.max_at = static_cast<std::size_t>(std::max_element(x.begin(), x.end()) - x.begin());
+  s.min = x[s.min_at];
+  s.max = x[s.max_at];
+  for (const double v : x) s.mean += v;
+  s.mean /= static_cast<double>(n);
+  if (n > 1) {
+    double squares = 0;
+    for (const double v : x) squares += (v - s.mean) * (v - s.mean);
+    s.sd = std::sqrt(squares / static_cast<double>(n - 1));
+  }
+  return s;
+}
+
+}  // namespace
+
+core::DrawsResult summarize_draws(const std::vector<std::uint64_t>& sensor_seeds,
+                                  const std::vector<core::SuiteResult>& draws) {
+  if (draws.empty()) throw std::invalid_argument("summarize_draws: no draws");
+  if (draws.size() != sensor_seeds.size())
+    throw std::invalid_argument("summarize_draws: " + std::to_string(draws.size()) + " draws but " +
+                                std::to_string(sensor_seeds.size()) + " sensor seeds");
+  if (std::set<std::uint64_t>(sensor_seeds.begin(), sensor_seeds.end()).size() != sensor_seeds.size())
+    throw std::invalid_argument("summarize_draws: a sensor seed repeats");
+  for (const auto& d : draws)
+    if (d.suite != draws.front().suite || d.planner != draws.front().planner)
+      throw std::invalid_argument("summarize_draws: the draws mix suites or planners (" + d.suite + ", " +
+                                  d.planner + " besides " + draws.front().suite + ", " + draws.front().planner +
+                                  ")");
+  core::DrawsResult r;
+  r.suite = draws.front().suite;
+  r.planner = draws.front().planner;
+  r.sensor_seeds = sensor_seeds;
+  r.draws = draws;
+  r.occlusion_time_s = spread_of(draws, [](const core::SuiteResult& d) { return d.summary.occlusion_time_s; });
+  r.success_rate = spread_of(draws, [](const core::SuiteResult& d) { return d.success_rate; });
+  r.longest_occlusion_s = spread_of(draws, [](const core::SuiteResult& d) { return d.summary.longest_occlusion_s; });
+  r.collisions = spread_of(draws, [](const core::SuiteResult& d) { return double(d.summary.collisions); });
+  r.min_clearance_m = std::numeric_limits<double>::infinity();
+  for (const auto& d : draws) {
+    r.draws_with_collision += d.summary.collisions > 0;
+    r.beyond_envelope_cycles += d.summary.beyond_envelope_cycles;
+    // A suite without episodes keeps its summary's 0; the episodes' own minima are what counts.
+    for (const auto& e : d.episodes) r.min_clearance_m = std::min(r.min_clearance_m, e.min_clearance_m);
+  }
   return r;
 }
 

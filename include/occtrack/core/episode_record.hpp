@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,30 @@ struct SuiteResult {
   /// episodes' medians, p99 and max the largest of the episodes'.
   EpisodeMetrics summary;
   double success_rate = 0.0;
+};
+
+/// One figure over a suite's runs at several draws of the simulated sensors' noise (sim::summarize_draws):
+/// mean, sample standard deviation (n - 1; 0 for one draw), least and largest, and which draws (indices into
+/// DrawsResult::draws, the first if several tie) gave the least and the largest.
+struct Spread {
+  double mean = 0, sd = 0, min = 0, max = 0;
+  std::size_t min_at = 0, max_at = 0;
+};
+
+/// A suite run once per sensor seed (`occtrack bench suite --sensor-seeds`): each draw's result, and how the
+/// suite's figures spread over the draws. One draw of the noise moves a suite's time hidden about as much as
+/// a planner seed does (docs/results.md, "The sensors' noise draws").
+struct DrawsResult {
+  std::string suite, planner;
+  std::vector<std::uint64_t> sensor_seeds;
+  std::vector<SuiteResult> draws;  ///< one per seed, in the same order
+  Spread occlusion_time_s;         ///< the suite's total time hidden, per draw
+  Spread success_rate;
+  Spread longest_occlusion_s;      ///< each draw's longest spell of lost sight
+  Spread collisions;               ///< the suite's collisions, per draw
+  int draws_with_collision = 0;
+  double min_clearance_m = 0;      ///< the least over every draw's episodes
+  int beyond_envelope_cycles = 0;  ///< summed over the draws
 };
 
 struct Snapshot {

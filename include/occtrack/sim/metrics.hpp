@@ -3,6 +3,7 @@
 // both as JSON and as the paper's table.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -55,5 +56,11 @@ class EpisodeMetricsAccumulator {
 /// first episode, which all of a suite's episodes share).
 core::SuiteResult summarize_suite(const std::string& suite, const std::string& planner,
                                   const std::vector<core::EpisodeMetrics>& episodes);
+
+/// How a suite's figures spread over runs at several sensor seeds: `draws[i]` is the suite run at
+/// `sensor_seeds[i]` (all with the same suite and planner). Throws std::invalid_argument when there are no
+/// draws, the two lists differ in length, a seed repeats, or the draws are of different suites or planners.
+core::DrawsResult summarize_draws(const std::vector<std::uint64_t>& sensor_seeds,
+                                  const std::vector<core::SuiteResult>& draws);
 
 }  // namespace occtrack::sim
