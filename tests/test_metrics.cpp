@@ -145,7 +145,8 @@ TEST(Metrics, DrawsSpreadOverSensorSeeds) {
     return sim::summarize_suite("suite", "planner", {a, b});
   };
   const std::vector<std::uint64_t> seeds = {7, 3, 11};
-  const auto r = sim::summarize_draws(seeds, {draw(1.0, 0, 0.3, 0.5), draw(2.0, 2, -0.05, 1.0), draw(6.0, 0, 0.2, 4.0)});
+  const auto r =
+      sim::summarize_draws(seeds, {draw(1.0, 0, 0.3, 0.5), draw(2.0, 2, -0.05, 1.0), draw(6.0, 0, 0.2, 4.0)});
   EXPECT_EQ(r.suite, "suite");
   EXPECT_EQ(r.draws.size(), 3u);
   EXPECT_DOUBLE_EQ(r.occlusion_time_s.mean, 3.0);

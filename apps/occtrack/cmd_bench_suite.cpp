@@ -2,10 +2,12 @@
 //                       [--sensor-seeds LIST] [episode options]
 //
 // Runs every scenario of a suite (a folder of YAML files, or a name under scenarios/) with a planner, J
-// episodes at a time (suite_runner.hpp), and prints the paper-style table. With --sensor-seeds it runs the
-// suite once per seed of the simulated sensors and prints how the figures spread over those noise draws. Each episode's planner runs
+// episodes at a time (suite_runner.hpp), and prints the paper-style table. Each episode's planner runs
 // single-threaded unless --threads says otherwise, so that computation times stay comparable. `--latency auto`
-// is measured once, before the episodes, and held fixed for all of them.
+// is measured once, before the episodes, and held fixed for all of them. With --sensor-seeds it runs the suite
+// once per seed of the simulated sensors, one draw after another, and prints how the figures spread over those
+// noise draws (sim::summarize_draws).
+#include <algorithm>
 #include <cstdint>
 #include <iostream>
 #include <set>
@@ -133,7 +135,9 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
       ->check(episode_cli::validator(seed_list_rule, "LIST"))
       ->excludes(cmd->get_option("--sensor-seed"));
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
-  cmd->add_option("--json", o->json_path, "Write {suite, planner, episodes, summary, settings, created_by} as JSON");
+  cmd->add_option("--json", o->json_path,
+                  "Write {suite, planner, episodes, summary, settings, created_by} as JSON (with --sensor-seeds: "
+                  "{suite, planner, sensor_seeds, draws, over_draws, settings, created_by})");
   cmd->add_option("--svg-dir", o->svg_dir, "Write one figure per episode into this folder");
   cmd->add_option("--html-dir", o->html_dir,
                   "Write one animated HTML replay per episode into this folder, and index.html linking them");

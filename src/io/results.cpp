@@ -129,8 +129,9 @@ std::string suite_table(const std::vector<core::SuiteResult>& results) {
 std::string draws_table(const core::DrawsResult& r) {
   std::string out;
   char line[256];
-  std::snprintf(line, sizeof line, "| %-16s | %-14s | %-11s | %-28s | %-17s | %10s | %-19s |\n", "suite", "planner",
-                "sensor seed", "occlusion time (s) / success", "longest spell (s)", "collisions", "least clearance (m)");
+  std::snprintf(line, sizeof line, "| %-16s | %-14s | %-11s | %-28s | %-17s | %10s | %-19s |\n", "suite",
+                "planner", "sensor seed", "occlusion time (s) / success", "longest spell (s)", "collisions",
+                "least clearance (m)");
   out += line;
   out += "|------------------|----------------|-------------|------------------------------|-------------------|"
          "------------|---------------------|\n";
