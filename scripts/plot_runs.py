@@ -4,11 +4,11 @@
 Usage: scripts/plot_runs.py --out FILE.svg [--title T] LABEL=FILE.json[,FILE.json...] [LABEL=... ...]
 
 Each FILE.json is what `occtrack bench suite --json` writes; one written with --sensor-seeds counts as one
-run per noise draw it holds. For every suite that the files hold (in the
-order first met), the plot has a group; in it, each label has a column with one dot per run (the time the
-target was hidden, summed over the run's episodes) and a bar at the mean. Runs that differ only in the
-planner's seed show how much one run says; a label whose dots sit apart from another's differs beyond luck.
-A run with a collision is drawn as a cross. Globs are expanded, so LABEL='out/cvae-s*-*.json' takes every seed.
+run per noise draw it holds. For every suite that the files hold (in the order first met), the plot has a
+group; in it, each label has a column with one dot per run (the time the target was hidden, summed over the
+run's episodes) and a bar at the mean. Runs that differ only in the planner's seed show how much one run
+says; a label whose dots sit apart from another's differs beyond luck. A run with a collision is drawn as a
+cross. Globs are expanded, so LABEL='out/cvae-s*-*.json' takes every seed.
 """
 import argparse
 import glob

@@ -1,10 +1,8 @@
 #include "occtrack/io/results.hpp"
 
 #include <cmath>
-#include <algorithm>
 #include <cstdint>
 #include <cstdio>
-#include <limits>
 #include <nlohmann/json.hpp>
 
 namespace occtrack::io {
@@ -137,13 +135,12 @@ std::string draws_table(const core::DrawsResult& r) {
          "------------|---------------------|\n";
   for (std::size_t i = 0; i < r.draws.size(); ++i) {
     const auto& d = r.draws[i];
-    double clearance = std::numeric_limits<double>::infinity();
-    for (const auto& e : d.episodes) clearance = std::min(clearance, e.min_clearance_m);
     char occlusion[64];
     std::snprintf(occlusion, sizeof occlusion, "%.1f / %.2f", d.summary.occlusion_time_s, d.success_rate);
     std::snprintf(line, sizeof line, "| %-16s | %-14s | %11llu | %-28s | %17.1f | %10d | %19.3f |\n",
                   d.suite.c_str(), d.planner.c_str(), static_cast<unsigned long long>(r.sensor_seeds.at(i)),
-                  occlusion, d.summary.longest_occlusion_s, d.summary.collisions, finite_or_zero(clearance));
+                  occlusion, d.summary.longest_occlusion_s, d.summary.collisions,
+                  finite_or_zero(d.summary.min_clearance_m));
     out += line;
   }
   std::snprintf(line, sizeof line, "\nover %zu sensor draws (mean / sd / least (seed) / largest (seed)):\n",

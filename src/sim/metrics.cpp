@@ -192,8 +192,7 @@ core::DrawsResult summarize_draws(const std::vector<std::uint64_t>& sensor_seeds
   for (const auto& d : draws) {
     r.draws_with_collision += d.summary.collisions > 0;
     r.beyond_envelope_cycles += d.summary.beyond_envelope_cycles;
-    // A suite without episodes keeps its summary's 0; the episodes' own minima are what counts.
-    for (const auto& e : d.episodes) r.min_clearance_m = std::min(r.min_clearance_m, e.min_clearance_m);
+    r.min_clearance_m = std::min(r.min_clearance_m, d.summary.min_clearance_m);
   }
   return r;
 }
