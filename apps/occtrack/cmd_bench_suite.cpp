@@ -7,11 +7,11 @@
 // is measured once, before the episodes, and held fixed for all of them. With --sensor-seeds it runs the suite
 // once per seed of the simulated sensors, one draw after another, and prints how the figures spread over those
 // noise draws (sim::summarize_draws).
-#include <algorithm>
 #include <cstdint>
 #include <iostream>
 #include <set>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "cli_support.hpp"
@@ -28,7 +28,7 @@ namespace {
 
 struct SuiteOptions {
   std::string suite, json_path, svg_dir, html_dir;
-  std::string sensor_seeds;  ///< empty: one run at --sensor-seed
+  std::vector<std::string> sensor_seeds;  ///< items "S" or "A-B"; empty: one run at --sensor-seed
   int jobs = 1;
   EpisodeCliOptions episode;
 };
@@ -41,42 +41,46 @@ std::uint64_t seed_number(const std::string& text) {
   return std::stoull(text);
 }
 
-/// "1-10", "1,4,7", "2-4,9": the seeds in the order written. Throws std::invalid_argument with the rule broken.
-std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
-  std::vector<std::uint64_t> seeds;
-  std::set<std::uint64_t> seen;
-  std::size_t begin = 0;
-  while (begin <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', begin), text.size());
-    const std::string item = text.substr(begin, comma - begin);
-    const std::size_t dash = item.find('-');
-    const std::uint64_t first = seed_number(item.substr(0, dash));
-    const std::uint64_t last = dash == std::string::npos ? first : seed_number(item.substr(dash + 1));
-    if (last < first) throw std::invalid_argument("the range " + item + " runs backwards");
-    if (last - first >= kMaxDraws) throw std::invalid_argument("more than " + std::to_string(kMaxDraws) + " seeds");
-    for (std::uint64_t s = first;; ++s) {
-      if (!seen.insert(s).second) throw std::invalid_argument("seed " + std::to_string(s) + " is given twice");
-      seeds.push_back(s);
-      if (seeds.size() > kMaxDraws)
-        throw std::invalid_argument("more than " + std::to_string(kMaxDraws) + " seeds");
-      if (s == last) break;
-    }
-    begin = comma + 1;
-  }
-  return seeds;
+/// One item of --sensor-seeds, "S" or "A-B", as its first and last seed. Throws std::invalid_argument with
+/// the rule broken.
+std::pair<std::uint64_t, std::uint64_t> seed_range(const std::string& item) {
+  const std::size_t dash = item.find('-');
+  const std::uint64_t first = seed_number(item.substr(0, dash));
+  const std::uint64_t last = dash == std::string::npos ? first : seed_number(item.substr(dash + 1));
+  if (last < first) throw std::invalid_argument("the range " + item + " runs backwards");
+  return {first, last};
 }
 
-std::string seed_list_rule(const std::string& text) {
+std::string seed_item_rule(const std::string& item) {
   try {
-    parse_seed_list(text);
+    seed_range(item);
     return "";
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
 }
 
-int run_draws(const SuiteOptions& o, const Suite& suite, SuiteRunOptions run) {
-  const std::vector<std::uint64_t> seeds = parse_seed_list(o.sensor_seeds);
+/// The seeds the items name, in the order written. Throws std::invalid_argument on a repeated seed or more
+/// than kMaxDraws of them.
+std::vector<std::uint64_t> expand_seeds(const std::vector<std::string>& items) {
+  std::vector<std::uint64_t> seeds;
+  std::set<std::uint64_t> seen;
+  for (const auto& item : items) {
+    const auto [first, last] = seed_range(item);
+    for (std::uint64_t s = first;; ++s) {
+      if (!seen.insert(s).second) throw std::invalid_argument("--sensor-seeds: seed " + std::to_string(s) +
+                                                              " is given twice");
+      seeds.push_back(s);
+      if (seeds.size() > kMaxDraws)
+        throw std::invalid_argument("--sensor-seeds: more than " + std::to_string(kMaxDraws) + " seeds");
+      if (s == last) break;
+    }
+  }
+  return seeds;
+}
+
+int run_draws(const SuiteOptions& o, const std::vector<std::uint64_t>& seeds, const Suite& suite,
+              SuiteRunOptions run) {
   std::cout << run_settings_line(run.planner, run.planner_options, run.settings, seeds) << std::endl;
   const std::string svg_dir = run.svg_dir, html_dir = run.html_dir;
   std::vector<core::SuiteResult> draws;
@@ -100,6 +104,7 @@ int run_draws(const SuiteOptions& o, const Suite& suite, SuiteRunOptions run) {
 }
 
 int run(const SuiteOptions& o) {
+  const std::vector<std::uint64_t> seeds = expand_seeds(o.sensor_seeds);  // a repeat is refused before loading
   const Suite suite = load_suite(o.suite);                                // refuse bad files up front
   planners::make_planner(o.episode.planner, o.episode.planner_settings());  // and an unknown planner
   SuiteRunOptions run;
@@ -109,7 +114,7 @@ int run(const SuiteOptions& o) {
   run.jobs = o.jobs;
   run.svg_dir = o.svg_dir;
   run.html_dir = o.html_dir;
-  if (!o.sensor_seeds.empty()) return run_draws(o, suite, run);
+  if (!seeds.empty()) return run_draws(o, seeds, suite, run);
   std::cout << run_settings_line(run.planner, run.planner_options, run.settings) << "\n";
   const core::SuiteResult result = run_suite(suite, run);
   std::cout << io::suite_table({result});
@@ -132,7 +137,8 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
   cmd->add_option("--sensor-seeds", o->sensor_seeds,
                   "Run the suite once per sensor seed (LIST: 1-10, 1,4,7 or 2-4,9) and print how its figures spread "
                   "over these noise draws (mean, sd, least, largest); --json then holds every draw")
-      ->check(episode_cli::validator(seed_list_rule, "LIST"))
+      ->delimiter(',')
+      ->check(episode_cli::validator(seed_item_rule, "LIST"))
       ->excludes(cmd->get_option("--sensor-seed"));
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
   cmd->add_option("--json", o->json_path,
