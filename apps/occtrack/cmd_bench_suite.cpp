@@ -9,9 +9,7 @@
 // noise draws (sim::summarize_draws).
 #include <cstdint>
 #include <iostream>
-#include <set>
 #include <stdexcept>
-#include <utility>
 #include <vector>
 
 #include "cli_support.hpp"
@@ -20,6 +18,7 @@
 #include "occtrack/io/results.hpp"
 #include "occtrack/sim/metrics.hpp"
 #include "run_settings.hpp"
+#include "sensor_seeds.hpp"
 #include "suite_runner.hpp"
 
 namespace occtrack::app {
@@ -32,52 +31,6 @@ struct SuiteOptions {
   int jobs = 1;
   EpisodeCliOptions episode;
 };
-
-constexpr std::size_t kMaxDraws = 1000;
-
-std::uint64_t seed_number(const std::string& text) {
-  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19)
-    throw std::invalid_argument("\"" + text + "\" is not a seed (an integer >= 0 of at most 19 digits)");
-  return std::stoull(text);
-}
-
-/// One item of --sensor-seeds, "S" or "A-B", as its first and last seed. Throws std::invalid_argument with
-/// the rule broken.
-std::pair<std::uint64_t, std::uint64_t> seed_range(const std::string& item) {
-  const std::size_t dash = item.find('-');
-  const std::uint64_t first = seed_number(item.substr(0, dash));
-  const std::uint64_t last = dash == std::string::npos ? first : seed_number(item.substr(dash + 1));
-  if (last < first) throw std::invalid_argument("the range " + item + " runs backwards");
-  return {first, last};
-}
-
-std::string seed_item_rule(const std::string& item) {
-  try {
-    seed_range(item);
-    return "";
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-}
-
-/// The seeds the items name, in the order written. Throws std::invalid_argument on a repeated seed or more
-/// than kMaxDraws of them.
-std::vector<std::uint64_t> expand_seeds(const std::vector<std::string>& items) {
-  std::vector<std::uint64_t> seeds;
-  std::set<std::uint64_t> seen;
-  for (const auto& item : items) {
-    const auto [first, last] = seed_range(item);
-    for (std::uint64_t s = first;; ++s) {
-      if (!seen.insert(s).second) throw std::invalid_argument("--sensor-seeds: seed " + std::to_string(s) +
-                                                              " is given twice");
-      seeds.push_back(s);
-      if (seeds.size() > kMaxDraws)
-        throw std::invalid_argument("--sensor-seeds: more than " + std::to_string(kMaxDraws) + " seeds");
-      if (s == last) break;
-    }
-  }
-  return seeds;
-}
 
 int run_draws(const SuiteOptions& o, const std::vector<std::uint64_t>& seeds, const Suite& suite,
               SuiteRunOptions run) {
@@ -104,7 +57,7 @@ int run_draws(const SuiteOptions& o, const std::vector<std::uint64_t>& seeds, co
 }
 
 int run(const SuiteOptions& o) {
-  const std::vector<std::uint64_t> seeds = expand_seeds(o.sensor_seeds);  // a repeat is refused before loading
+  const std::vector<std::uint64_t> seeds = expand_sensor_seeds(o.sensor_seeds);  // a repeat is refused before loading
   const Suite suite = load_suite(o.suite);                                // refuse bad files up front
   planners::make_planner(o.episode.planner, o.episode.planner_settings());  // and an unknown planner
   SuiteRunOptions run;
@@ -134,11 +87,9 @@ void add_bench_suite_command(CLI::App& bench, int& exit_code) {
       add_command<SuiteOptions>(bench, "suite", "Run a benchmark suite with a planner and print the paper's table");
   cmd->add_option("suite", o->suite, "Suite folder, or a name under scenarios/ (e.g. static-1ms)")->required();
   add_episode_options(cmd, o->episode);
-  cmd->add_option("--sensor-seeds", o->sensor_seeds,
-                  "Run the suite once per sensor seed (LIST: 1-10, 1,4,7 or 2-4,9) and print how its figures spread "
-                  "over these noise draws (mean, sd, least, largest); --json then holds every draw")
-      ->delimiter(',')
-      ->check(episode_cli::validator(seed_item_rule, "LIST"))
+  add_sensor_seeds_option(cmd, o->sensor_seeds,
+                          "Run the suite once per sensor seed (LIST: 1-10, 1,4,7 or 2-4,9) and print how its figures "
+                          "spread over these noise draws (mean, sd, least, largest); --json then holds every draw")
       ->excludes(cmd->get_option("--sensor-seed"));
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
   cmd->add_option("--json", o->json_path,

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "cli_support.hpp"
+#include "sensor_seeds.hpp"
 
 namespace occtrack::app {
 
@@ -96,8 +97,7 @@ std::string run_settings_line(const std::string& planner, const planners::Planne
   if (sensor_seeds.empty()) {
     s << ", sensor seed " << e.seed;
   } else {
-    s << ", sensor seeds";
-    for (std::size_t i = 0; i < sensor_seeds.size(); ++i) s << (i ? "," : " ") << sensor_seeds[i];
+    s << ", sensor seeds " << sensor_seeds_text(sensor_seeds);
   }
   return s.str();
 }
