@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <utility>
 #include <regex>
 #include <string>
 #include <vector>
@@ -87,6 +89,44 @@ TEST(PaperTables, OneTablePerSuiteInOrderWithSettings) {
             std::string::npos)
       << first;
   EXPECT_NE(second.find("| cvae-b5 | 10 | 30.0 | 45.0 / 0.50 | 25.0 % |"), std::string::npos) << second;
+}
+
+// Rows at several sensor draws: a seed column in the suite's table, then one line per planner and compute scale
+// over its draws. cvae-b5 at scale 1 hidden 1, 2 and 6 s at seeds 7, 3 and 9 (mean 3, sd sqrt(7) = 2.6458,
+// least at seed 7, largest at 9), 3 collisions in each draw (9, in 3 draws); the follower at seeds 7 and 3
+// with 4 and 4 s (sd 0) and no collision in the second. A suite without seeded rows keeps its plain table.
+TEST(PaperTables, SensorDrawsGetASeedColumnAndTheirSpread) {
+  std::vector<PaperRow> rows;
+  const std::pair<std::uint64_t, double> cvae[] = {{7, 1.0}, {3, 2.0}, {9, 6.0}};
+  for (const auto& [seed, hidden] : cvae) {
+    rows.push_back(row("cvae-b5", "random-2ms", 1, 3.0, hidden, 180.0));
+    rows.back().sensor_seed = seed;
+    rows.back().result.summary.min_clearance_m = 0.1 * hidden;
+  }
+  for (const std::uint64_t seed : {7, 3}) {
+    rows.push_back(row("follower", "random-2ms", 1, 0.02, 4.0, 180.0));
+    rows.back().sensor_seed = seed;
+    rows.back().result.summary.min_clearance_m = 0.05;
+  }
+  rows.back().result.summary.collisions = 0;
+  rows.push_back(row("follower", "sixwall-1ms", 1, 0.02, 18.0, 180.0));  // one draw, no seed
+  const std::string md = occtrack::io::paper_tables(rows, {});
+  const auto random = md.find("## random-2ms"), sixwall = md.find("## sixwall-1ms");
+  ASSERT_NE(random, std::string::npos);
+  ASSERT_NE(sixwall, std::string::npos);
+  const std::string seeded = md.substr(random, sixwall - random), plain = md.substr(sixwall);
+  EXPECT_NE(seeded.find("| planner | compute scale | sensor seed | latency ms |"), std::string::npos) << seeded;
+  EXPECT_NE(seeded.find("| cvae-b5 | 1 | 3 | 3.00 | 2.0 / 0.50 |"), std::string::npos) << seeded;
+  EXPECT_NE(seeded.find("| cvae-b5 | 1 | 3 | 3.0 / 2.6 | 1.0 (7) | 6.0 (9) | 0.50 | 9 (3) | 0.100 |"),
+            std::string::npos)
+      << seeded;
+  EXPECT_NE(seeded.find("| follower | 1 | 2 | 4.0 / 0.0 | 4.0 (7) | 4.0 (7) | 0.50 | 3 (1) | 0.050 |"),
+            std::string::npos)
+      << seeded;
+  EXPECT_EQ(count(seeded, "Over the sensors' noise draws"), 1);
+  EXPECT_EQ(plain.find("sensor seed"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("Over the sensors' noise draws"), std::string::npos);
+  EXPECT_NE(plain.find("| follower | 1 | 0.0200 | 18.0 / 0.50 |"), std::string::npos) << plain;
 }
 
 TEST(PaperTables, NonFiniteValuesPrintAsNotAvailable) {

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <utility>
 
+#include "occtrack/sim/metrics.hpp"
+
 namespace occtrack::io {
 
 namespace {
@@ -120,31 +122,96 @@ double cycle_time_ms(const PaperRow& row) {
   return row.latency_ms > 0.0 ? row.latency_ms : row.result.summary.compute_ms.median * row.compute_scale;
 }
 
+namespace {
+
+/// The rows of `suite` at several sensor draws, grouped by planner label and compute scale in the order they
+/// first appear, each group summarised over its draws.
+struct DrawsGroup {
+  std::string label;
+  double compute_scale;
+  core::DrawsResult draws;
+};
+
+std::vector<DrawsGroup> draws_groups(const std::vector<PaperRow>& rows, const std::string& suite) {
+  struct Pending {
+    std::string label;
+    double compute_scale;
+    std::vector<std::uint64_t> seeds;
+    std::vector<core::SuiteResult> results;
+  };
+  std::vector<Pending> pending;
+  for (const auto& r : rows) {
+    if (r.result.suite != suite || !r.sensor_seed) continue;
+    auto it = std::find_if(pending.begin(), pending.end(), [&](const Pending& p) {
+      return p.label == r.label && p.compute_scale == r.compute_scale;
+    });
+    if (it == pending.end()) it = pending.insert(pending.end(), Pending{r.label, r.compute_scale, {}, {}});
+    it->seeds.push_back(*r.sensor_seed);
+    it->results.push_back(r.result);
+  }
+  std::vector<DrawsGroup> groups;
+  for (auto& p : pending) groups.push_back({p.label, p.compute_scale, sim::summarize_draws(p.seeds, p.results)});
+  return groups;
+}
+
+std::string draws_section(const std::vector<DrawsGroup>& groups) {
+  std::string out = "\nOver the sensors' noise draws (time hidden per draw: mean, sample sd, least and largest with "
+                    "their seeds):\n\n";
+  out += table_row({"planner", "compute scale", "draws", "occlusion time (s) mean / sd", "least (seed)",
+                    "largest (seed)", "success mean", "collisions (draws with any)", "least clearance (m)"});
+  out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& g : groups) {
+    const core::DrawsResult& d = g.draws;
+    const auto& t = d.occlusion_time_s;
+    int collisions = 0;
+    for (const auto& draw : d.draws) collisions += draw.summary.collisions;
+    out += table_row({g.label, setting(g.compute_scale), std::to_string(d.draws.size()),
+                      number(t.mean, 1) + " / " + number(t.sd, 1),
+                      number(t.min, 1) + " (" + std::to_string(d.sensor_seeds[t.min_at]) + ")",
+                      number(t.max, 1) + " (" + std::to_string(d.sensor_seeds[t.max_at]) + ")",
+                      number(d.success_rate.mean, 2),
+                      std::to_string(collisions) + " (" + std::to_string(d.draws_with_collision) + ")",
+                      number(d.min_clearance_m, 3)});
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string paper_tables(const std::vector<PaperRow>& rows, const std::vector<std::string>& settings) {
   std::string out = "# Benchmark v2: occtrack bench paper\n\n";
   for (const auto& s : settings) out += "- " + s + "\n";
   for (const auto& suite : suites_of(rows)) {
     std::size_t episodes = 0;
+    bool seeded = false;
     for (const auto& r : rows)
-      if (r.result.suite == suite) episodes = std::max(episodes, r.result.episodes.size());
+      if (r.result.suite == suite) {
+        episodes = std::max(episodes, r.result.episodes.size());
+        seeded = seeded || r.sensor_seed.has_value();
+      }
     out += "\n## " + suite + " (" + std::to_string(episodes) + (episodes == 1 ? " episode" : " episodes") + ")\n\n";
-    out += table_row({"planner", "compute scale", "latency ms", "occlusion time (s) / success", "occluded",
-                      "acceleration mean/min/max", "compute ms median/p99/max", "collisions",
-                      "longest occlusion (s)", "occlusion stretches"});
-    out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    std::vector<std::string> head = {"planner", "compute scale", "latency ms", "occlusion time (s) / success",
+                                     "occluded", "acceleration mean/min/max", "compute ms median/p99/max",
+                                     "collisions", "longest occlusion (s)", "occlusion stretches"};
+    if (seeded) head.insert(head.begin() + 2, "sensor seed");
+    out += table_row(head);
+    out += std::string("|---") + (seeded ? "|---:" : "") + "|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const auto& r : rows) {
       if (r.result.suite != suite) continue;
       const auto& s = r.result.summary;
-      out += table_row({r.label, setting(r.compute_scale), significant(r.latency_ms),
-                        number(s.occlusion_time_s, 1) + " / " + number(r.result.success_rate, 2),
-                        number(100.0 * occluded_share(r.result), 1) + " %",
-                        number(s.acceleration.mean, 2) + " / " + number(s.acceleration.min, 2) + " / " +
-                            number(s.acceleration.max, 2),
-                        significant(s.compute_ms.median) + " / " + significant(s.compute_ms.p99) + " / " +
-                            significant(s.compute_ms.max),
-                        std::to_string(s.collisions), number(s.longest_occlusion_s, 1),
-                        std::to_string(s.occlusion_stretches)});
+      std::vector<std::string> cells = {
+          r.label, setting(r.compute_scale), significant(r.latency_ms),
+          number(s.occlusion_time_s, 1) + " / " + number(r.result.success_rate, 2),
+          number(100.0 * occluded_share(r.result), 1) + " %",
+          number(s.acceleration.mean, 2) + " / " + number(s.acceleration.min, 2) + " / " +
+              number(s.acceleration.max, 2),
+          significant(s.compute_ms.median) + " / " + significant(s.compute_ms.p99) + " / " +
+              significant(s.compute_ms.max),
+          std::to_string(s.collisions), number(s.longest_occlusion_s, 1), std::to_string(s.occlusion_stretches)};
+      if (seeded) cells.insert(cells.begin() + 2, r.sensor_seed ? std::to_string(*r.sensor_seed) : "");
+      out += table_row(cells);
     }
+    if (seeded) out += draws_section(draws_groups(rows, suite));
   }
   return out;
 }

@@ -4,6 +4,8 @@
 // The per-episode JSON is io/results.hpp's.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,9 @@ struct PaperRow {
   double latency_ms = 0.0;
   /// result.suite names the table the row goes into; result.summary holds the suite's totals.
   core::SuiteResult result;
+  /// The draw of the simulated sensors' noise the row ran at, when the report holds several draws of each row
+  /// (`bench paper --sensor-seeds`); unset for a report of one draw.
+  std::optional<std::uint64_t> sensor_seed;
 };
 
 /// The markdown report: a title, the settings as a bullet list (`settings`, one line each, e.g.
@@ -28,7 +33,10 @@ struct PaperRow {
 /// of the run, acceleration mean/min/max (m/s^2), compute ms median/p99/max, collisions, longest occlusion (s)
 /// and occlusion stretches (separate spells of lost sight), all from result.summary (sim::summarize_suite:
 /// the stretches summed over the episodes, the longest occlusion the largest). Non-finite values print as
-/// "n/a".
+/// "n/a". When rows of a suite carry a sensor seed, its table gets a "sensor seed" column after the compute
+/// scale, and a second table follows: one line per planner label and compute scale over its draws
+/// (sim::summarize_draws): draws, time hidden mean / sd, least and largest with their seeds, mean success,
+/// collisions summed and the draws with any, least clearance.
 std::string paper_tables(const std::vector<PaperRow>& rows, const std::vector<std::string>& settings);
 
 /// The share of the run the target was hidden (summary occlusion time over summary duration), NaN for a
