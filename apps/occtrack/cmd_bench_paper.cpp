@@ -1,13 +1,16 @@
-// occtrack bench paper [--suites a,b,...] [--planners ...] [--compute-scales 1,10] [--episodes N] [--jobs J]
-//                      [--out DIR]
+// occtrack bench paper [--suites a,b,...] [--planners ...] [--compute-scales 1,10] [--sensor-seeds LIST]
+//                      [--shield] [--episodes N] [--jobs J] [--out DIR]
 //
 // The v2 benchmark in one command (issue 10): every planner row of the paper's Table I plus ours, on the v2
-// suites, at each compute scale, with the sensing settings of shared/spec/simulation.md ("Suites v2"). Writes
+// suites, at each compute scale, with the sensing settings of shared/spec/simulation.md ("Suites v2"); with
+// --sensor-seeds each row once per draw of the sensors' noise, and the spread over the draws; with --shield
+// every row behind the safety layer (issue 12's comparison, with the projcem-predictor row). Writes
 // DIR/tables.md (io/paper_tables.hpp), DIR/tradeoff.svg and DIR/episodes.json (every episode's metrics), and
 // prints the tables. The files are rewritten after every finished run, so that an interrupted run keeps what
 // it did.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -20,6 +23,7 @@
 #include "occtrack/io/paper_tables.hpp"
 #include "occtrack/io/results.hpp"
 #include "run_settings.hpp"
+#include "sensor_seeds.hpp"
 #include "suite_runner.hpp"
 
 namespace fs = std::filesystem;
@@ -34,6 +38,7 @@ struct PaperPlanner {
   const char* planner;
   const char* description;
   void (*tune)(EpisodeCliOptions&);  ///< what sets the row apart from the v2 table settings
+  bool by_default = true;            ///< run when --planners is not given
 };
 
 const std::vector<PaperPlanner>& paper_planners() {
@@ -49,6 +54,9 @@ const std::vector<PaperPlanner>& paper_planners() {
       {"autochaser-wp100", "autochaser", "AutoChaser with 100 true future target waypoints as prior",
        [](EpisodeCliOptions& o) { o.planner_options.waypoints = 100; }},
       {"projcem", "projcem", "Proj-CEM, online budget", [](EpisodeCliOptions&) {}},
+      // Issue 12 compares the learned policy with this row, both behind the safety layer (--shield).
+      {"projcem-predictor", "projcem", "Proj-CEM, online budget, ranking against the target predictor",
+       [](EpisodeCliOptions& o) { o.planner_options.predictor = true; }, false},
       {"bc", "bc", "behaviour cloning, B = 30", [](EpisodeCliOptions&) {}},
       {"cvae-b30", "cvae", "learned policy (CVAE), B = 30",
        [](EpisodeCliOptions& o) { o.planner_options.batch = 30; }},
@@ -60,17 +68,20 @@ const std::vector<PaperPlanner>& paper_planners() {
   return rows;
 }
 
-std::vector<std::string> paper_planner_labels() {
+std::vector<std::string> paper_planner_labels(bool default_only = false) {
   std::vector<std::string> labels;
-  for (const auto& p : paper_planners()) labels.push_back(p.label);
+  for (const auto& p : paper_planners())
+    if (p.by_default || !default_only) labels.push_back(p.label);
   return labels;
 }
 
 struct PaperOptions {
   std::vector<std::string> suites = {"sixwall-1ms", "sixwall-2ms", "sixwall-dynamic-1.5ms",
                                      "random-2ms",  "clutter-2ms", "clutter-dynamic-2ms"};
-  std::vector<std::string> planners = paper_planner_labels();
+  std::vector<std::string> planners = paper_planner_labels(true);
   std::vector<double> compute_scales = {1.0, 10.0};
+  std::vector<std::string> sensor_seeds;  ///< --sensor-seeds items; empty: one draw, the default sensor seed
+  bool shield = false;
   int episodes = 0;
   int jobs = 1;
   std::string out = "bench-paper";
@@ -78,8 +89,9 @@ struct PaperOptions {
 
 /// The episode options of the v2 tables (shared/spec/simulation.md, "Suites v2"): latency auto, tau 0.25 s,
 /// the paper's LiDAR (shared/reference/paper_setup.md: 360 beams, range noise sigma 0.01 m), target estimate
-/// noise 0.05 m and 0.1 m/s, the target's state always known (as in the paper).
-EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_scale) {
+/// noise 0.05 m and 0.1 m/s, the target's state always known (as in the paper); the safety layer off unless
+/// `shield`.
+EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_scale, bool shield = false) {
   EpisodeCliOptions o;
   o.planner = row.planner;
   o.latency = "auto";
@@ -89,7 +101,7 @@ EpisodeCliOptions paper_episode_options(const PaperPlanner& row, double compute_
   o.lidar_noise = "0.01";
   o.target_noise = "0.05,0.1";
   o.target_observation = "always";
-  o.planner_options.shield = false;  // the paper's comparisons: the planners alone (docs/safety.md for the layer)
+  o.planner_options.shield = shield;  // the paper's comparisons: the planners alone (docs/safety.md for the layer)
   row.tune(o);
   return o;
 }
@@ -112,15 +124,18 @@ std::string ranking_weight_text(const PaperPlanner& row) {
 /// The table header: every setting, and what was skipped or failed. The episode and safety settings are
 /// read from paper_episode_options (with the first row's planner), so that they are stated where they are set.
 std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
+                                        const std::vector<std::uint64_t>& sensor_seeds,
                                         const std::vector<std::string>& not_run) {
-  EpisodeCliOptions v2 = paper_episode_options(paper_planners().front(), 1.0);
+  EpisodeCliOptions v2 = paper_episode_options(paper_planners().front(), 1.0, o.shield);
   const std::string latency = v2.latency;
   v2.latency = "none";  // settings() leaves "auto" to resolve_episode_settings; the line below says it
   const sim::EpisodeSettings episode = v2.settings();
   const planners::PlannerOptions planner = v2.planner_settings(&episode);
   std::vector<std::string> lines = {
       "command: `occtrack bench paper --suites " + join(o.suites) + " --planners " + join(o.planners) +
-          " --compute-scales " + join(scales) + (o.episodes > 0 ? " --episodes " + std::to_string(o.episodes) : "") +
+          " --compute-scales " + join(scales) +
+          (sensor_seeds.empty() ? "" : " --sensor-seeds " + sensor_seeds_text(sensor_seeds)) +
+          (o.shield ? " --shield" : "") + (o.episodes > 0 ? " --episodes " + std::to_string(o.episodes) : "") +
           " --jobs " + std::to_string(o.jobs) + "`",
       o.episodes > 0 ? "episodes: the first " + std::to_string(o.episodes) + " of each suite only (a partial run)"
                      : "episodes: every episode of each suite",
@@ -142,12 +157,19 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
       "target estimate: Gaussian noise " + episode_cli::show(episode.target_position_noise) + " m on position, " +
           episode_cli::show(episode.target_velocity_noise) + " m/s on velocity; target_observation " +
           v2.target_observation,
-      "seeds: planner " + std::to_string(planner.seed) + ", sensors " + std::to_string(episode.seed) +
-          " (one draw of each for every row; other draws, `bench suite --seed S --sensor-seed S`, move a suite's "
-          "time hidden, most on the dynamic suites: docs/results.md)",
+      sensor_seeds.empty()
+          ? "seeds: planner " + std::to_string(planner.seed) + ", sensors " + std::to_string(episode.seed) +
+                " (one draw of each for every row; other draws, `--sensor-seeds LIST`, move a suite's time hidden, "
+                "most on the dynamic suites: docs/results.md)"
+          : "seeds: planner " + std::to_string(planner.seed) + ", sensors " + sensor_seeds_text(sensor_seeds) +
+                " (every row once per draw of the sensors' noise, one after another; each suite's table is "
+                "followed by the spread over the draws)",
       std::string("safety layer: ") +
-          (planner.shield ? "on" : "off (the planners alone, as in the paper; docs/safety.md)") +
-          "; target predictor: " + (planner.predictor ? "on" : "off"),
+          (planner.shield ? "on (docs/safety.md)" : "off (the planners alone, as in the paper; docs/safety.md)") +
+          "; target predictor: " + (planner.predictor ? "on" : "off") +
+          (std::find(o.planners.begin(), o.planners.end(), "projcem-predictor") != o.planners.end()
+               ? " (on for projcem-predictor)"
+               : ""),
       "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
           std::to_string(std::thread::hardware_concurrency()) + " hardware threads",
   };
@@ -176,6 +198,7 @@ void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows,
     j["runs"].push_back({{"label", r.label},
                          {"compute_scale", r.compute_scale},
                          {"latency_ms", r.latency_ms},
+                         {"sensor_seed", r.sensor_seed ? nlohmann::json(*r.sensor_seed) : nlohmann::json()},
                          {"settings", row_settings[i]},
                          {"result", nlohmann::json::parse(io::suite_json(r.result))}});
   }
@@ -184,6 +207,7 @@ void write_outputs(const fs::path& out, const std::vector<io::PaperRow>& rows,
 }
 
 int run(const PaperOptions& o) {
+  const std::vector<std::uint64_t> sensor_seeds = expand_sensor_seeds(o.sensor_seeds);
   std::vector<std::string> scales;
   for (const double s : o.compute_scales) {
     if (!(std::isfinite(s) && s > 0.0))
@@ -207,7 +231,7 @@ int run(const PaperOptions& o) {
   std::vector<const PaperPlanner*> runnable;
   for (const PaperPlanner* p : planners) {
     try {
-      planners::make_planner(p->planner, paper_episode_options(*p, 1.0).planner_settings());
+      planners::make_planner(p->planner, paper_episode_options(*p, 1.0, o.shield).planner_settings());
       runnable.push_back(p);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "occtrack bench paper: skipping %s: %s\n", p->label, e.what());
@@ -220,37 +244,48 @@ int run(const PaperOptions& o) {
   std::vector<io::PaperRow> rows;
   std::vector<nlohmann::json> row_settings;  // each row's settings, resolved (run_settings.hpp)
   bool failed = false;
-  const std::size_t total = runnable.size() * o.compute_scales.size() * suites.size();
+  const std::size_t draws = std::max<std::size_t>(sensor_seeds.size(), 1);
+  const std::size_t total = runnable.size() * o.compute_scales.size() * suites.size() * draws;
   std::size_t started = 0;
   for (const PaperPlanner* p : runnable)
     for (const double scale : o.compute_scales)
       for (const Suite& suite : suites) {
         const std::string name = std::string(p->label) + " x" + episode_cli::show(scale) + " " + suite.name;
-        std::fprintf(stderr, "bench paper [%zu/%zu]: %s, compute scale %s, %s (%zu episodes)\n", ++started, total,
-                     p->label, episode_cli::show(scale).c_str(), suite.name.c_str(), suite.scenarios.size());
         try {
-          const EpisodeCliOptions episode = paper_episode_options(*p, scale);
+          const EpisodeCliOptions episode = paper_episode_options(*p, scale, o.shield);
           SuiteRunOptions run;
           run.planner = episode.planner;
-          run.settings = resolve_episode_settings(episode, suite.scenarios);  // alone, before the episodes
+          // Latency auto is measured once, alone, before the episodes of every draw.
+          run.settings = resolve_episode_settings(episode, suite.scenarios);
           run.planner_options = episode.planner_settings(&run.settings);
           run.jobs = o.jobs;
-          run.progress_label = "  " + name + " ";
-          io::PaperRow row;
-          row.label = p->label;
-          row.compute_scale = scale;
-          row.latency_ms = run.settings.latency_ms.value_or(0.0);
-          row.result = run_suite(suite, run);
-          rows.push_back(std::move(row));
-          row_settings.push_back(run_settings_json(run.planner, run.planner_options, run.settings));
+          for (std::size_t d = 0; d < draws; ++d) {
+            std::string draw_name = name;
+            if (!sensor_seeds.empty()) {
+              run.settings.seed = sensor_seeds[d];
+              draw_name += " sensor seed " + std::to_string(sensor_seeds[d]);
+            }
+            std::fprintf(stderr, "bench paper [%zu/%zu]: %s (%zu episodes)\n", ++started, total, draw_name.c_str(),
+                         suite.scenarios.size());
+            run.progress_label = "  " + draw_name + " ";
+            io::PaperRow row;
+            row.label = p->label;
+            row.compute_scale = scale;
+            row.latency_ms = run.settings.latency_ms.value_or(0.0);
+            if (!sensor_seeds.empty()) row.sensor_seed = sensor_seeds[d];
+            row.result = run_suite(suite, run);
+            rows.push_back(std::move(row));
+            row_settings.push_back(run_settings_json(run.planner, run.planner_options, run.settings));
+            write_outputs(out, rows, row_settings, settings_lines(o, scales, sensor_seeds, not_run), o);
+          }
         } catch (const std::exception& e) {
           std::fprintf(stderr, "occtrack bench paper: %s failed: %s\n", name.c_str(), e.what());
           not_run.push_back(name + " (" + e.what() + ")");
           failed = true;
+          write_outputs(out, rows, row_settings, settings_lines(o, scales, sensor_seeds, not_run), o);
         }
-        write_outputs(out, rows, row_settings, settings_lines(o, scales, not_run), o);
       }
-  const std::vector<std::string> header = settings_lines(o, scales, not_run);
+  const std::vector<std::string> header = settings_lines(o, scales, sensor_seeds, not_run);
   write_outputs(out, rows, row_settings, header, o);
   std::cout << io::paper_tables(rows, header);
   std::fprintf(stderr, "occtrack bench paper: wrote %s, %s and %s\n", (out / "tables.md").c_str(),
@@ -266,12 +301,20 @@ void add_bench_paper_command(CLI::App& bench, int& exit_code) {
   cmd->add_option("--suites", o->suites, "Suite folders or names under scenarios/, comma-separated")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--planners", o->planners, "Rows to run, comma-separated: " + join(paper_planner_labels(), ", "))
+  cmd->add_option("--planners", o->planners,
+                  "Rows to run, comma-separated: " + join(paper_planner_labels(), ", ") +
+                      " (the default: all but projcem-predictor, issue 12's comparison row)")
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--compute-scales", o->compute_scales, "Compute scales, comma-separated (each > 0)")
       ->delimiter(',')
       ->capture_default_str();
+  add_sensor_seeds_option(cmd, o->sensor_seeds,
+                          "Run every row once per sensor seed (LIST: 1-10, 1,4,7 or 2-4,9; default: one draw at "
+                          "sensor seed 1) and add the spread over these noise draws after each suite's table");
+  cmd->add_flag("--shield", o->shield,
+                "Run every row behind the safety layer (docs/safety.md; default off: the planners alone, as in the "
+                "paper's comparisons)");
   add_bounded_option(cmd, "--episodes", o->episodes, "Run only the first N episodes of each suite (0: all)", 0,
                      1000000);
   add_bounded_option(cmd, "--jobs", o->jobs, "Episodes run at the same time", 1, 256);
