@@ -121,6 +121,16 @@ std::string ranking_weight_text(const PaperPlanner& row) {
   return "; ranking's tracking weight " + episode_cli::show(planners::tracking_weight_for(row.planner, options));
 }
 
+/// ", on for a, b" (or ", off for ..."): the selected rows whose target predictor is not `usual`.
+std::string predictor_exceptions(const PaperOptions& o, bool usual) {
+  std::vector<std::string> rows;
+  for (const auto& p : paper_planners())
+    if (std::find(o.planners.begin(), o.planners.end(), p.label) != o.planners.end() &&
+        paper_episode_options(p, 1.0, o.shield).planner_options.predictor != usual)
+      rows.push_back(p.label);
+  return rows.empty() ? "" : std::string(usual ? ", off for " : ", on for ") + join(rows, ", ");
+}
+
 /// The table header: every setting, and what was skipped or failed. The episode and safety settings are
 /// read from paper_episode_options (with the first row's planner), so that they are stated where they are set.
 std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector<std::string>& scales,
@@ -166,10 +176,7 @@ std::vector<std::string> settings_lines(const PaperOptions& o, const std::vector
                 "followed by the spread over the draws)",
       std::string("safety layer: ") +
           (planner.shield ? "on (docs/safety.md)" : "off (the planners alone, as in the paper; docs/safety.md)") +
-          "; target predictor: " + (planner.predictor ? "on" : "off") +
-          (std::find(o.planners.begin(), o.planners.end(), "projcem-predictor") != o.planners.end()
-               ? " (on for projcem-predictor)"
-               : ""),
+          "; target predictor: " + (planner.predictor ? "on" : "off") + predictor_exceptions(o, planner.predictor),
       "episodes run " + std::to_string(o.jobs) + " at a time, each planner single-threaded; machine: " +
           std::to_string(std::thread::hardware_concurrency()) + " hardware threads",
   };

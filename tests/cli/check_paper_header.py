@@ -41,9 +41,15 @@ for run in d["runs"]:
                  f"{e['target_velocity_noise_m_s']:g} m/s on velocity; target_observation {e['target_observation']}",
                  seeds_text,
                  "safety layer: " + ("on" if p["shield"] else "off"),
-                 "target predictor: " + ("on" if p["predictor"] else "off")):
+                 "target predictor: "):
         check(text in header, f"the header does not say '{text}':\n{header}")
         check(text in tables, f"tables.md does not say '{text}'")
+    # "off" or "off, on for a, b": the usual state, and the rows that differ from it
+    predictor_text = next(l for l in d["settings"] if "; target predictor: " in l).split("; target predictor: ")[1]
+    usual, _, rest = predictor_text.partition(", ")
+    exceptions = rest.split(" for ", 1)[1].split(", ") if rest else []
+    check((usual == ("on" if p["predictor"] else "off")) != (run["label"] in exceptions),
+          f"the header's predictor ('{predictor_text}') for {run['label']}, which ran with predictor {p['predictor']}")
     if p["name"] != "autochaser":  # the weight of the ranking the run used, on its planner's line
         line = next((l for l in d["settings"] if l.startswith(f"planner {run['label']}: ")), "")
         check(line.endswith(f"; ranking's tracking weight {p['tracking_weight']:g}"),
